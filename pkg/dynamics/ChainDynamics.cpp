@@ -1,0 +1,271 @@
+#include "dynamics/ChainDynamics.hpp"
+#include "core/Errors.hpp"
+#include <algorithm>
+#include <cmath>
+
+namespace woven {
+
+Real criticalTimeStep(const Fabric& f) {
+  Real dt = INFINITY;
+  for (Index e = 0; e < f.nElems(); ++e) {
+    if (!f.alive[e] || f.stiffness[e] <= 0) continue;
+    const Real me = f.elementMass(e), K = f.stiffness[e];
+    const Real xi = f.damping[e] / std::sqrt(K * me);
+    dt = std::min(dt, std::sqrt(me / K) * (std::sqrt(1 + xi * xi) - xi));
+  }
+  return dt;
+}
+
+ChainDynamics::ChainDynamics(Fabric& fabric) : f_(fabric) {}
+
+void ChainDynamics::prescribeVelocity(Index i, const Vec3& v) {
+  f_.checkNode(i);
+  require(v.allFinite(), "velocity", v.norm(), "finite [m/s]");
+  auto it = std::find(loads_.kinematicNodes.begin(), loads_.kinematicNodes.end(), i);
+  if (it == loads_.kinematicNodes.end()) {
+    loads_.kinematicNodes.push_back(i);
+    loads_.kinematicVelocity.push_back(v);
+    loads_.reaction.push_back(Vec3::Zero());
+  } else {
+    loads_.kinematicVelocity[it - loads_.kinematicNodes.begin()] = v;
+  }
+  f_.invMass[i] = 0.0;
+  f_.vel[i] = v;
+}
+
+void ChainDynamics::release(Index i) {
+  f_.checkNode(i);
+  auto it = std::find(loads_.kinematicNodes.begin(), loads_.kinematicNodes.end(), i);
+  if (it == loads_.kinematicNodes.end()) return;
+  const auto k = it - loads_.kinematicNodes.begin();
+  loads_.kinematicNodes.erase(it);
+  loads_.kinematicVelocity.erase(loads_.kinematicVelocity.begin() + k);
+  loads_.reaction.erase(loads_.reaction.begin() + k);
+  f_.invMass[i] = 1.0 / f_.mass[i];
+}
+
+void ChainDynamics::setPointForce(Index i, const Vec3& F) {
+  f_.checkNode(i);
+  require(F.allFinite(), "force", F.norm(), "finite [N]");
+  auto it = std::find(loads_.forceNodes.begin(), loads_.forceNodes.end(), i);
+  if (it != loads_.forceNodes.end()) {
+    const auto k = it - loads_.forceNodes.begin();
+    loads_.forceNodes.erase(it);
+    loads_.forceValues.erase(loads_.forceValues.begin() + k);
+  }
+  if (F.squaredNorm() > 0) {
+    loads_.forceNodes.push_back(i);
+    loads_.forceValues.push_back(F);
+  }
+  if (started_) refreshForces();
+}
+
+void ChainDynamics::setBodyAcceleration(const Vec3& g) {
+  require(g.allFinite(), "gravity", g.norm(), "finite [m/s^2]");
+  loads_.bodyAcceleration = g;
+}
+
+Vec3 ChainDynamics::acceleration(Index i) const {
+  const Real im = f_.invMass[i];
+  return im > 0 ? Vec3(f_.force[i] * im + loads_.bodyAcceleration) : Vec3(Vec3::Zero());
+}
+
+Vec3 ChainDynamics::syncVelocity(Index i) const { return f_.vel[i] + 0.5 * dtPrev_ * acceleration(i); }
+
+Vec3 ChainDynamics::reaction(const std::vector<Index>& nodes) const {
+  Vec3 R = Vec3::Zero();
+  for (Index i : nodes) {
+    auto it = std::find(loads_.kinematicNodes.begin(), loads_.kinematicNodes.end(), i);
+    if (it != loads_.kinematicNodes.end()) R += loads_.reaction[it - loads_.kinematicNodes.begin()];
+  }
+  return R;
+}
+
+void ChainDynamics::start() {
+  computeForces(0.0);
+  books_.damped = 0;
+  books_.work = 0;
+  Real ke = 0;
+  for (Index i = 0; i < f_.nNodes(); ++i) ke += 0.5 * f_.mass[i] * f_.vel[i].squaredNorm();
+  books_.kinetic = ke;
+  books_.initial = ke + books_.elastic;
+  started_ = true;
+  checkpoint();
+}
+
+void ChainDynamics::refreshForces() {
+  if (!started_) return start();
+  const Real d = books_.damped, w = books_.work;
+  computeForces(0.0);
+  books_.damped = d;
+  books_.work = w;
+}
+
+// Fused half-kicks and drift over all nodes (velocity Verlet, see the header). Returns the kinetic
+// energy of step n; momentumFree collects sum m v_{n+1/2} of free nodes for the body-force work.
+Real ChainDynamics::kickDrift(Real dt, Vec3& momentumFree) {
+  for (std::size_t k = 0; k < loads_.kinematicNodes.size(); ++k)
+    f_.vel[loads_.kinematicNodes[k]] = loads_.kinematicVelocity[k];
+  const Real hPrev = 0.5 * dtPrev_, h = 0.5 * dt;
+  const Vec3 g = loads_.bodyAcceleration;
+  Vec3* __restrict x = f_.pos.data();
+  Vec3* __restrict v = f_.vel.data();
+  const Vec3* __restrict F = f_.force.data();
+  const Real* __restrict im = f_.invMass.data();
+  const Real* __restrict m = f_.mass.data();
+  const Index n = f_.nNodes();
+  Real ke = 0;
+  Vec3 p = Vec3::Zero();
+  for (Index i = 0; i < n; ++i) {
+    const Real free = im[i] > 0 ? 1.0 : 0.0;
+    const Vec3 a = F[i] * im[i] + free * g;
+    const Vec3 vn = v[i] + hPrev * a;
+    ke += m[i] * vn.squaredNorm();
+    v[i] = vn + h * a;
+    p += (free * m[i]) * v[i];
+    x[i] += dt * v[i];
+  }
+  momentumFree = p;
+  return 0.5 * ke;
+}
+
+// Axial spring + dashpot of every CP (paper Eq. 3): T = K(l - l0) + c*ldot along n = (x1-x0)/l,
+// +T*n on the first node, -T*n on the second. Tension-only yarns carry no force while slack and
+// their dashpot never pushes (T = max(0, T)). Chains are contiguous, so each node's force is
+// assigned by the element before it and completed by the element after it: no zeroing pass.
+void ChainDynamics::computeForces(Real dt) {
+  Vec3* __restrict F = f_.force.data();
+  const Vec3* __restrict x = f_.pos.data();
+  const Vec3* __restrict v = f_.vel.data();
+  Real elastic = 0, dissipated = 0, check = 0;
+  for (const Yarn& y : f_.yarns) {
+    const bool tensionOnly = f_.materials[y.material].tensionOnly;
+    const Index e0 = y.firstElem, e1 = y.firstElem + y.nElems;
+    const Real* __restrict l0 = f_.restLength.data();
+    const Real* __restrict K = f_.stiffness.data();
+    const Real* __restrict C = f_.damping.data();
+    Real* __restrict strain = f_.strain.data();
+    Real* __restrict tension = f_.tension.data();
+    F[y.firstNode].setZero();
+    for (Index e = e0; e < e1; ++e) {
+      const Index a = y.firstNode + (e - e0);
+      const Vec3 d = x[a + 1] - x[a];
+      const Real l = d.norm();
+      const Vec3 n = d / l;
+      const Real ldot = n.dot(v[a + 1] - v[a]);
+      const Real stretch = l - l0[e];
+      Real Te = K[e] * stretch;
+      Real T = Te + C[e] * ldot;
+      if (tensionOnly) {
+        const bool taut = stretch > 0;
+        Te = taut ? Te : 0.0;
+        T = taut ? std::max(T, 0.0) : 0.0;
+      }
+      elastic += Te * stretch;  // = K*stretch^2 where the spring acts
+      dissipated += (T - Te) * ldot;
+      check += l;
+      strain[e] = stretch / l0[e];
+      tension[e] = T;
+      const Vec3 Fa = T * n;
+      F[a] += Fa;
+      F[a + 1] = -Fa;
+    }
+  }
+  if (!std::isfinite(elastic + check + dissipated)) failNonFinite();
+  for (std::size_t k = 0; k < loads_.forceNodes.size(); ++k) F[loads_.forceNodes[k]] += loads_.forceValues[k];
+
+  // Work of the loads over this step: point forces and body force on the drift just made, supports
+  // with the trapezoidal rule on their reactions (R = -f - m g at constant prescribed velocity).
+  Real work = 0;
+  const Vec3 g = loads_.bodyAcceleration;
+  for (std::size_t k = 0; k < loads_.forceNodes.size(); ++k) {
+    const Index i = loads_.forceNodes[k];
+    if (f_.invMass[i] > 0) work += loads_.forceValues[k].dot(v[i]) * dt;
+  }
+  for (std::size_t k = 0; k < loads_.kinematicNodes.size(); ++k) {
+    const Index i = loads_.kinematicNodes[k];
+    const Vec3 R = -F[i] - f_.mass[i] * g;
+    work += 0.5 * (R + loads_.reaction[k]).dot(v[i]) * dt;
+    loads_.reaction[k] = R;
+  }
+  books_.elastic = 0.5 * elastic;
+  books_.damped += dissipated * dt;  // dashpot power (T-Te)*ldot = c*ldot^2 >= 0 leaves the motion
+  books_.work += work;
+}
+
+void ChainDynamics::step(Real dt) {
+  require(std::isfinite(dt) && dt > 0, "dt", dt, "(0, dt_crit] s");
+  if (!started_) start();
+  Vec3 p;
+  const Real ke = kickDrift(dt, p);
+  if (!std::isfinite(ke)) failNonFinite();
+  books_.kinetic = ke;
+  books_.work += loads_.bodyAcceleration.dot(p) * dt;
+  computeForces(dt);
+  ++step_;
+  time_ += dt;
+  dtPrev_ = dt;
+  const Real budget = limits.blowupFactor * (books_.initial + std::abs(books_.work)) + limits.energyFloor;
+  if (books_.kinetic + books_.elastic + books_.damped > budget) {
+    Index worst = 0;
+    Real worstKe = -1;
+    for (Index i = 0; i < f_.nNodes(); ++i) {
+      const Real k = f_.mass[i] * f_.vel[i].squaredNorm();
+      if (k > worstKe) worstKe = k, worst = i;
+    }
+    throw InstabilityError(step_, worst, -1,
+                           "energy blow-up: kinetic+elastic+damped = " +
+                               fmt(books_.kinetic + books_.elastic + books_.damped) + " J exceeds " +
+                               fmt(limits.blowupFactor) + " x (initial + work) = " + fmt(budget) +
+                               " J (time step too large, or a load out of bounds)");
+  }
+  if (limits.checkpointInterval > 0 && step_ % limits.checkpointInterval == 0) checkpoint();
+}
+
+void ChainDynamics::failNonFinite() {
+  for (Index i = 0; i < f_.nNodes(); ++i) {
+    if (!f_.pos[i].allFinite()) throw InstabilityError(step_ + 1, i, -1, "non-finite position");
+    if (!f_.vel[i].allFinite()) throw InstabilityError(step_ + 1, i, -1, "non-finite velocity");
+  }
+  for (Index e = 0; e < f_.nElems(); ++e) {
+    const Index a = f_.elem0[e];
+    const Real l = (f_.pos[a + 1] - f_.pos[a]).norm();
+    if (!(l > 0)) throw InstabilityError(step_ + 1, a, e, "element collapsed to zero length");
+    if (!std::isfinite(f_.tension[e])) throw InstabilityError(step_ + 1, a, e, "non-finite element force");
+  }
+  throw InstabilityError(step_ + 1, -1, -1, "non-finite energy");
+}
+
+EnergyBooks ChainDynamics::energy() const {
+  EnergyBooks b = books_;
+  if (!started_) {  // nothing computed yet: evaluate the state as it stands
+    ChainDynamics probe(*this);
+    probe.start();
+    return probe.books_;
+  }
+  Real ke = 0;
+  for (Index i = 0; i < f_.nNodes(); ++i) ke += 0.5 * f_.mass[i] * syncVelocity(i).squaredNorm();
+  b.kinetic = ke;
+  return b;
+}
+
+void ChainDynamics::checkpoint() {
+  goodPos_ = f_.pos;
+  goodVel_ = f_.vel;
+  goodStep_ = step_;
+  goodTime_ = time_;
+}
+
+void ChainDynamics::restoreLastGood() {
+  if (goodPos_.size() != f_.pos.size()) return;
+  f_.pos = goodPos_;
+  f_.vel = goodVel_;
+  step_ = goodStep_;
+  time_ = goodTime_;
+  const Real d = books_.damped, w = books_.work;
+  computeForces(0.0);
+  books_.damped = d;
+  books_.work = w;
+}
+
+}  // namespace woven

@@ -1,0 +1,21 @@
+// Energy books of the chain dynamics. All in joules. "work" is what the loads (kinematic nodes,
+// point forces, body force) put in; the balance kinetic + elastic + damped = initial + work holds to
+// the integrator's O(dt^2) accuracy.
+#pragma once
+#include "core/Types.hpp"
+
+namespace woven {
+
+struct EnergyBooks {
+  Real kinetic = 0;     ///< sum 1/2 m v^2 at the current integer step [J]
+  Real elastic = 0;     ///< sum 1/2 K (l - l0)^2 over taut elements [J]
+  Real damped = 0;      ///< energy dissipated by the element dashpots since the start [J]
+  Real work = 0;        ///< work done on the fabric by loads since the start [J]
+  Real initial = 0;     ///< kinetic + elastic at step 0 [J]
+
+  Real total() const { return kinetic + elastic + damped; }
+  /// (kinetic + elastic + damped) - (initial + work) [J]
+  Real balanceError() const { return total() - initial - work; }
+};
+
+}  // namespace woven

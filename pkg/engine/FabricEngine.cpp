@@ -1,0 +1,43 @@
+#include "engine/FabricEngine.hpp"
+#include "core/Errors.hpp"
+#include <cmath>
+
+namespace woven {
+
+FabricEngine::FabricEngine(Fabric fabric)
+    : fabric_(std::make_unique<Fabric>(std::move(fabric))), dynamics_(*fabric_) {
+  invalidate();
+}
+
+void FabricEngine::invalidate() { dtCrit_ = criticalTimeStep(*fabric_); }
+
+void FabricEngine::step(Real dt) {
+  // Refused before anything moves: a step above the central-difference limit grows without bound.
+  require(std::isfinite(dt) && dt > 0 && dt <= dtCrit_ * (1 + 1e-12), "dt", dt,
+          "(0, dt_crit = " + fmt(dtCrit_) + "] s (stable limit of the chain; set O.dt below it)");
+  dynamics_.step(dt);
+}
+
+KinematicState FabricEngine::state() const {
+  KinematicState s;
+  s.pos = fabric_->pos, s.vel = fabric_->vel, s.step = dynamics_.stepCount(), s.time = dynamics_.time();
+  return s;
+}
+
+KinematicState FabricEngine::lastGoodState() const {
+  KinematicState s;
+  s.pos = dynamics_.lastGoodPos(), s.vel = dynamics_.lastGoodVel();
+  s.step = dynamics_.lastGoodStep(), s.time = dynamics_.lastGoodTime();
+  if (s.pos.empty()) return state();
+  return s;
+}
+
+void FabricEngine::setState(const KinematicState& s) {
+  require(static_cast<Index>(s.pos.size()) == fabric_->nNodes() && s.vel.size() == s.pos.size(), "state",
+          static_cast<double>(s.pos.size()), "a state with " + fmt(fabric_->nNodes()) + " nodes");
+  fabric_->pos = s.pos;
+  fabric_->vel = s.vel;
+  dynamics_.refreshForces();
+}
+
+}  // namespace woven

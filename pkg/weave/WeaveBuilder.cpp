@@ -1,0 +1,176 @@
+#include "weave/WeaveBuilder.hpp"
+#include "core/Errors.hpp"
+#include "geom/SegmentDistance.hpp"
+#include <algorithm>
+#include <cmath>
+
+namespace woven {
+
+void WeaveParams::validate() const {
+  require(nx >= 1 && nx <= 100000, "nx", nx, "[1, 100000]");
+  require(ny >= 1 && ny <= 100000, "ny", ny, "[1, 100000]");
+  require(cpPerSpan >= 1 && cpPerSpan <= 1000, "cp_per_span", cpPerSpan, "[1, 1000] CPs between crossings");
+  warpSection.validate("warp_");
+  weftSection.validate("weft_");
+  warpMaterial.validate("warp_");
+  weftMaterial.validate("weft_");
+  require(std::isfinite(warpSpacing) && warpSpacing > 0, "warp_spacing", warpSpacing, "(0, inf) m");
+  require(std::isfinite(weftSpacing) && weftSpacing > 0, "weft_spacing", weftSpacing, "(0, inf) m");
+  require(warpSpacing >= warpSection.width, "warp_spacing", warpSpacing,
+          "[warp_width = " + fmt(warpSection.width) + ", inf) m: neighbouring warp yarns would overlap");
+  require(weftSpacing >= weftSection.width, "weft_spacing", weftSpacing,
+          "[weft_width = " + fmt(weftSection.width) + ", inf) m: neighbouring weft yarns would overlap");
+  require(warpCrimp < 0 || (std::isfinite(warpCrimp) && warpCrimp < 1), "warp_crimp", warpCrimp,
+          "[0, 1), or < 0 for Peirce's touching geometry");
+  require(weftCrimp < 0 || (std::isfinite(weftCrimp) && weftCrimp < 1), "weft_crimp", weftCrimp,
+          "[0, 1), or < 0 for Peirce's touching geometry");
+}
+
+namespace {
+
+long floorDiv(long a, long b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// Height profile of one yarn's centre line, evaluated at node q (q = 0 at the first crossing,
+// n CPs per span, nodes equally spaced in projection). Between crossings of different heights the
+// line is Peirce's: an arc of radius D/2 about the crossing yarn's centre, the straight segment at
+// the weave angle theta, and the mirror arc; between crossings of equal height (a float) it is flat.
+// Crossing heights are periodic with the yarn's crossing count.
+struct Profile {
+  std::vector<Real> zc;  // centre-line height at each crossing [m]
+  int n = 1;             // CPs per span
+  Real p = 0;            // crossing spacing along the yarn [m]
+  Real theta = 0, R = 0; // Peirce weave angle [rad] and arc radius D/2 [m]
+
+  Real z(long q) const {
+    const long N = static_cast<long>(zc.size());
+    const long k = floorDiv(q, n);
+    const long r = q - k * n;
+    const Real z0 = zc[((k % N) + N) % N], z1 = zc[(((k + 1) % N) + N) % N];
+    if (r == 0 || z0 == z1) return z0;
+    const Real u = p * Real(r) / Real(n), sg = z1 > z0 ? 1.0 : -1.0;
+    const Real ua = R * std::sin(theta);  // projected length of each arc
+    if (u <= ua) return z0 + sg * (R - std::sqrt(R * R - u * u));
+    if (u >= p - ua) return z1 - sg * (R - std::sqrt(R * R - (p - u) * (p - u)));
+    return z0 + sg * (R * (1 - std::cos(theta)) + (u - ua) * std::tan(theta));
+  }
+  Real s(long q) const { return p * (0.5 + Real(q) / Real(n)); }  // axial coordinate [m]
+  // Chain length over `crossings` spans starting at the first crossing [m].
+  Real repeatLength(long crossings) const {
+    Real L = 0;
+    for (long q = 0; q < crossings * n; ++q) L += std::hypot(s(q + 1) - s(q), z(q + 1) - z(q));
+    return L;
+  }
+};
+
+}  // namespace
+
+Weave buildWeave(const WeaveParams& P) {
+  P.validate();
+  const Pattern& pat = P.pattern;
+  const int R = pat.rows(), C = pat.cols();
+  const int NW = P.ny * R, NF = P.nx * C;
+  const int n = P.cpPerSpan;
+  const Real D = P.warpSection.thickness + P.weftSection.thickness;
+
+  // Crimp heights: Peirce's touching geometry splits D equally (h_warp = h_weft = D/2) unless a
+  // crimp is given; a given crimp fixes that family's height through Peirce's relations.
+  Weave w;
+  WeaveSummary& S = w.summary;
+  Real hw = 0.5 * D, hf = 0.5 * D;
+  if (P.warpCrimp >= 0) hw = peirceFromCrimp(P.weftSpacing, P.warpCrimp, D).h;
+  if (P.weftCrimp >= 0) hf = peirceFromCrimp(P.warpSpacing, P.weftCrimp, D).h;
+  if (P.warpCrimp >= 0 && P.weftCrimp < 0) hf = std::max(D - hw, 0.0);
+  if (P.weftCrimp >= 0 && P.warpCrimp < 0) hw = std::max(D - hf, 0.0);
+  if (hw + hf < D * (1 - 1e-12)) {
+    const std::string which = P.warpCrimp >= 0 ? "warp_crimp" : "weft_crimp";
+    throw ParameterError(which, fmt(P.warpCrimp >= 0 ? P.warpCrimp : P.weftCrimp),
+                         "a crimp large enough that h_warp + h_weft >= t_warp + t_weft (yarns would overlap "
+                         "at the crossings)");
+  }
+  S.warpPeirce = peirceFromHeight(P.weftSpacing, hw, D);
+  S.weftPeirce = peirceFromHeight(P.warpSpacing, hf, D);
+
+  std::vector<Profile> warp(NW), weft(NF);
+  for (int i = 0; i < NW; ++i) {
+    warp[i].n = n, warp[i].p = P.weftSpacing, warp[i].theta = S.warpPeirce.theta, warp[i].R = 0.5 * S.warpPeirce.D;
+    for (int j = 0; j < NF; ++j) warp[i].zc.push_back(pat.warpOver(i % R, j % C) ? 0.5 * hw : -0.5 * hw);
+  }
+  for (int j = 0; j < NF; ++j) {
+    weft[j].n = n, weft[j].p = P.warpSpacing, weft[j].theta = S.weftPeirce.theta, weft[j].R = 0.5 * S.weftPeirce.D;
+    for (int i = 0; i < NW; ++i) weft[j].zc.push_back(pat.warpOver(i % R, j % C) ? -0.5 * hf : 0.5 * hf);
+  }
+
+  // Each yarn runs m CPs past its outer crossings (half a span when n is even).
+  const long m = (n + 1) / 2;
+  auto nodesOf = [&](const Profile& pr, long crossings, auto place) {
+    Vec3Array pts;
+    for (long q = -m; q <= (crossings - 1) * n + m; ++q) pts.push_back(place(pr.s(q), pr.z(q)));
+    return pts;
+  };
+  Fabric& F = w.fabric;
+  for (int i = 0; i < NW; ++i) {
+    const Real y = (i + 0.5) * P.warpSpacing;
+    w.warpYarns.push_back(F.addYarn(nodesOf(warp[i], NF, [&](Real s, Real z) { return Vec3(s, y, z); }),
+                                    P.warpMaterial, P.warpSection, YarnFamily::Warp));
+  }
+  for (int j = 0; j < NF; ++j) {
+    const Real x = (j + 0.5) * P.weftSpacing;
+    w.weftYarns.push_back(F.addYarn(nodesOf(weft[j], NW, [&](Real s, Real z) { return Vec3(x, s, z); }),
+                                    P.weftMaterial, P.weftSection, YarnFamily::Weft));
+  }
+
+  // Summary: crimp and areal density of one repeat, clearance at every crossing.
+  S.warpYarns = NW, S.weftYarns = NF;
+  S.nodes = F.nNodes(), S.elements = F.nElems();
+  S.lengthX = NF * P.weftSpacing, S.lengthY = NW * P.warpSpacing;
+  const Real lw = P.warpMaterial.rho * P.warpMaterial.area, lf = P.weftMaterial.rho * P.weftMaterial.area;
+  Real mass = 0, cw = 0, cf = 0;
+  for (int i = 0; i < R; ++i) {
+    const Real L = warp[i].repeatLength(C);
+    mass += lw * L, cw += L / (C * P.weftSpacing) - 1;
+  }
+  for (int j = 0; j < C; ++j) {
+    const Real L = weft[j].repeatLength(R);
+    mass += lf * L, cf += L / (R * P.warpSpacing) - 1;
+  }
+  S.warpCrimpBuilt = cw / R, S.weftCrimpBuilt = cf / C;
+  S.arealDensity = mass / (C * P.weftSpacing * R * P.warpSpacing);
+
+  S.requiredGap = 0.5 * D;
+  S.minVerticalGap = INFINITY, S.minChainClearance = INFINITY;
+  for (int i = 0; i < NW; ++i) {
+    const Yarn& yw = F.yarns[w.warpYarns[i]];
+    for (int j = 0; j < NF; ++j) {
+      const Yarn& yf = F.yarns[w.weftYarns[j]];
+      const Index aw = yw.firstNode + static_cast<Index>(m + long(j) * n);  // node on the crossing
+      const Index af = yf.firstNode + static_cast<Index>(m + long(i) * n);
+      const bool over = pat.warpOver(i % R, j % C);
+      S.minVerticalGap = std::min(S.minVerticalGap, over ? F.pos[aw].z() - F.pos[af].z() : F.pos[af].z() - F.pos[aw].z());
+      // 3D distance of the two chains within one span either side of the crossing.
+      for (Index a = std::max(aw - n, yw.firstNode); a < std::min(aw + n, yw.firstNode + yw.nNodes - 1); ++a)
+        for (Index b = std::max(af - n, yf.firstNode); b < std::min(af + n, yf.firstNode + yf.nNodes - 1); ++b)
+          S.minChainClearance = std::min(
+              S.minChainClearance, closestSegmentSegment(F.pos[a], F.pos[a + 1], F.pos[b], F.pos[b + 1]).distance);
+    }
+  }
+  return w;
+}
+
+WeaveParams km2_706() {
+  WeaveParams p;
+  p.warpSpacing = p.weftSpacing = 25.4e-3 / 34;  // 34 x 34 ends per inch
+  YarnMaterial m;
+  m.E = 90e9;
+  m.rho = 1440;
+  m.area = (600.0 / 9000.0 * 1e-3) / m.rho;  // 600 denier = 66.7 tex -> 4.63e-8 m^2 of fibre
+  m.failureStrain = 0.05;
+  p.warpMaterial = p.weftMaterial = m;
+  YarnSection s;
+  s.width = 0.65e-3;       // measured 0.6-0.7 mm
+  s.thickness = 0.11e-3;   // measured 0.10-0.14 mm; with Peirce: crimp 1.09 %, 180.4 g/m^2
+  p.warpSection = p.weftSection = s;
+  p.cpPerSpan = 4;
+  return p;
+}
+
+}  // namespace woven

@@ -1,0 +1,63 @@
+// Builds a Fabric from a weave: pattern repeat, spacing, sections, crimp (given or from Peirce),
+// C1 B-spline centre lines with CP nodes, replicated nx x ny with continuous yarns.
+//
+// Frame: warp yarns run along x, spaced warpSpacing apart in y; weft yarns run along y, spaced
+// weftSpacing apart in x; z is normal to the fabric. Crossing (i, j) sits at
+// x = (j + 1/2)*weftSpacing, y = (i + 1/2)*warpSpacing; the yarn on top there has its centre line at
+// +h/2, the other at -h/2 (its own crimp height h), so the centre-line gap is (h_warp + h_weft)/2,
+// which Peirce's touching condition makes (t_warp + t_weft)/2.
+//
+// Centre line (Figure 2b/2c): Peirce's shape (arcs of radius D/2 about the crossing yarn, straight
+// segments at the weave angle), flat along floats, sampled by CP nodes equally spaced in projection
+// with a node on every crossing (the "extra nodes" of the paper's B-spline smoothing are the
+// cpPerSpan - 1 nodes between crossings). The node on a crossing sits exactly at +-h/2, so the
+// centre-line gap there is exactly (t_warp + t_weft)/2; the straight CPs next to it cut inside the
+// arc, so the 3D distance of the two node chains is slightly smaller (reported as
+// minChainClearance; it tends to the gap as cpPerSpan grows).
+#pragma once
+#include "core/Types.hpp"
+#include "fabric/Fabric.hpp"
+#include "weave/Pattern.hpp"
+#include "weave/Peirce.hpp"
+
+namespace woven {
+
+struct WeaveParams {
+  Pattern pattern = Pattern::plain();
+  int nx = 1;                  ///< repeats along x (weft yarns = nx * pattern.cols) [-]
+  int ny = 1;                  ///< repeats along y (warp yarns = ny * pattern.rows) [-]
+  Real warpSpacing = 25.4e-3 / 34;  ///< centre distance of neighbouring warp yarns [m]
+  Real weftSpacing = 25.4e-3 / 34;  ///< centre distance of neighbouring weft yarns [m]
+  YarnSection warpSection, weftSection;
+  YarnMaterial warpMaterial, weftMaterial;
+  Real warpCrimp = -1;         ///< < 0: from Peirce with touching yarns; else given [-]
+  Real weftCrimp = -1;
+  int cpPerSpan = 4;           ///< CPs between neighbouring crossings (>= 1)
+
+  void validate() const;       ///< throws ParameterError naming the parameter and range
+};
+
+struct WeaveSummary {
+  int warpYarns = 0, weftYarns = 0;
+  Index nodes = 0, elements = 0;
+  PeirceState warpPeirce, weftPeirce;  ///< Peirce geometry of each family (crimp heights used)
+  Real warpCrimpBuilt = 0, weftCrimpBuilt = 0;  ///< (chain length - projected)/projected over a repeat
+  Real arealDensity = 0;       ///< from the built chains over one repeat [kg/m^2]
+  Real requiredGap = 0;        ///< (t_warp + t_weft)/2 [m]
+  Real minVerticalGap = 0;     ///< min over crossings of the centre-line gap at the crossing [m]
+  Real minChainClearance = 0;  ///< min over crossings of the 3D distance of the two node chains [m]
+  Real lengthX = 0, lengthY = 0;  ///< nominal fabric size nx*cols*weftSpacing, ny*rows*warpSpacing [m]
+};
+
+struct Weave {
+  Fabric fabric;
+  WeaveSummary summary;
+  std::vector<Index> warpYarns, weftYarns;  ///< yarn indices in the fabric
+};
+
+Weave buildWeave(const WeaveParams& params);
+
+/// KM2 style 706 (600 denier para-aramid, 34 x 34 ends/inch, rho 1440, E 90 GPa, 5 % failure).
+WeaveParams km2_706();
+
+}  // namespace woven

@@ -1,0 +1,51 @@
+"""The YADE side of a FabricEngine: one woven step per YADE iteration, with YADE's O.dt.
+
+YADE's C++ Engine cannot be subclassed here (Debian ships no YADE headers), so the adapter is a
+PyRunner with iterPeriod=1 whose command calls the C++ step with O.dt: about 35 us of Python per
+iteration (measured with `yade -n -x scripts/bench_pyrunner.py`), independent of the fabric size.
+O.time and O.iter stay the clock; the fabric's own step counter must follow O.iter.
+"""
+import yade.wrapper
+
+_O = yade.wrapper.Omega()
+_registry = {}
+last_error = None  #: the last exception a woven step raised (InstabilityError keeps step, node, cause)
+
+
+def _step(key):
+    global last_error
+    try:
+        _registry[key].step(_O.dt)
+    except Exception as e:
+        last_error = e
+        raise
+
+
+def attach(engine, set_dt=True, safety=0.9, label=None, append=True):
+    """Puts `engine` (a woven.FabricEngine) into O.engines and returns the PyRunner that drives it.
+
+    set_dt: set O.dt = safety * engine.dt_crit [s] (safety in (0, 1]); otherwise O.dt must already
+            be <= engine.dt_crit, else ValueError naming dt and the allowed range (before any step).
+    label:  YADE label of the PyRunner.
+    append: add to the end of O.engines (else the caller places the returned PyRunner).
+    """
+    steppers = [type(e).__name__ for e in _O.engines
+                 if isinstance(e, yade.wrapper.TimeStepper) and not e.dead]
+    if steppers:
+        raise ValueError('O.engines holds %s, which changes O.dt; woven needs O.dt <= dt_crit: set '
+                         'O.engines yourself (a fresh scene has YADE\'s defaults) or make it dead' % ', '.join(steppers))
+    if not (0 < safety <= 1):
+        raise ValueError('safety = %r is invalid: allowed (0, 1]' % (safety,))
+    if set_dt:
+        _O.dt = safety * engine.dt_crit
+    elif not (0 < _O.dt <= engine.dt_crit * (1 + 1e-12)):
+        raise ValueError('dt = %.12g is invalid: allowed (0, dt_crit = %.12g] s (stable limit of the chain; '
+                         'set O.dt below it or attach(..., set_dt=True))' % (_O.dt, engine.dt_crit))
+    key = id(engine)
+    _registry[key] = engine
+    runner = yade.wrapper.PyRunner(command='__import__("woven.engine").engine._step(%d)' % key, iterPeriod=1)
+    if label:
+        runner.label = label
+    if append:
+        _O.engines = list(_O.engines) + [runner]
+    return runner

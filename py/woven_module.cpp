@@ -1,0 +1,262 @@
+// Boost.Python bindings of the woven core (module woven._woven). Vectors are Eigen::Vector3d, the
+// same C++ type as YADE's Vector3r, so YADE's converters pass YADE's Vector3 in and out unchanged.
+// Bulk arrays go out as bytes (numpy.frombuffer in woven/), never as Python loops over nodes.
+#include <boost/python.hpp>
+#include <boost/python/stl_iterator.hpp>
+#include "core/Errors.hpp"
+#include "engine/FabricEngine.hpp"
+#include "weave/WeaveBuilder.hpp"
+#include <memory>
+
+namespace bp = boost::python;
+using namespace woven;
+
+namespace {
+
+PyObject* g_instabilityType = nullptr;
+
+void translateParameterError(const ParameterError& e) { PyErr_SetString(PyExc_ValueError, e.what()); }
+
+void translateInstability(const InstabilityError& e) {
+  PyObject* inst = PyObject_CallFunction(g_instabilityType, "s", e.what());
+  if (!inst) return;
+  PyObject_SetAttrString(inst, "step", PyLong_FromLong(e.step()));
+  PyObject_SetAttrString(inst, "node", PyLong_FromLong(e.node()));
+  PyObject_SetAttrString(inst, "element", PyLong_FromLong(e.element()));
+  PyObject_SetAttrString(inst, "cause", PyUnicode_FromString(e.cause().c_str()));
+  PyErr_SetObject(g_instabilityType, inst);
+  Py_DECREF(inst);
+}
+
+template <class T>
+bp::object bytesOf(const std::vector<T>& v) {
+  return bp::object(bp::handle<>(PyBytes_FromStringAndSize(reinterpret_cast<const char*>(v.data()),
+                                                           static_cast<Py_ssize_t>(v.size() * sizeof(T)))));
+}
+
+Pattern patternFromList(bp::object rows) {
+  std::vector<std::vector<int>> m;
+  for (bp::stl_input_iterator<bp::object> r(rows), end; r != end; ++r) {
+    std::vector<int> row;
+    for (bp::stl_input_iterator<int> c(*r), e2; c != e2; ++c) row.push_back(*c);
+    m.push_back(row);
+  }
+  return Pattern(m);
+}
+bp::list patternMatrix(const Pattern& p) {
+  bp::list out;
+  for (const auto& r : p.matrix()) {
+    bp::list row;
+    for (int v : r) row.append(v);
+    out.append(row);
+  }
+  return out;
+}
+
+Index addYarn(Fabric& f, bp::object points, const YarnMaterial& m, const YarnSection& s) {
+  Vec3Array pts;
+  for (bp::stl_input_iterator<Vec3> it(points), end; it != end; ++it) pts.push_back(*it);
+  return f.addYarn(pts, m, s);
+}
+
+std::shared_ptr<FabricEngine> makeEngine(const Fabric& f) { return std::make_shared<FabricEngine>(f); }
+
+bp::tuple buildWeavePy(const WeaveParams& p) {
+  Weave w = buildWeave(p);
+  bp::list warp, weft;
+  for (Index y : w.warpYarns) warp.append(y);
+  for (Index y : w.weftYarns) weft.append(y);
+  return bp::make_tuple(std::make_shared<FabricEngine>(std::move(w.fabric)), w.summary, warp, weft);
+}
+
+// --- FabricEngine helpers ---
+Vec3 nodePos(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.fabric().pos[i]; }
+Vec3 nodeVel(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.dynamics().syncVelocity(i); }
+void setNodePos(FabricEngine& e, Index i, const Vec3& x) {
+  e.fabric().checkNode(i);
+  require(x.allFinite(), "position", x.norm(), "finite [m]");
+  e.fabric().pos[i] = x;
+  e.dynamics().refreshForces();
+}
+void setNodeVel(FabricEngine& e, Index i, const Vec3& v) {
+  e.fabric().checkNode(i);
+  require(v.allFinite(), "velocity", v.norm(), "finite [m/s]");
+  e.fabric().vel[i] = v;
+}
+Real nodeMass(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.fabric().mass[i]; }
+bp::tuple elementNodes(FabricEngine& e, Index k) {
+  e.fabric().checkElem(k);
+  return bp::make_tuple(e.fabric().elem0[k], e.fabric().elem0[k] + 1);
+}
+bp::dict yarnInfo(FabricEngine& e, Index y) {
+  require(y >= 0 && y < e.fabric().nYarns(), "yarn", y, "[0, " + fmt(e.fabric().nYarns() - 1) + "]");
+  const Yarn& Y = e.fabric().yarns[y];
+  const YarnMaterial& M = e.fabric().materials[Y.material];
+  bp::dict d;
+  d["first_node"] = Y.firstNode, d["n_nodes"] = Y.nNodes, d["first_element"] = Y.firstElem, d["n_elements"] = Y.nElems;
+  d["family"] = Y.family == YarnFamily::Warp ? "warp" : (Y.family == YarnFamily::Weft ? "weft" : "free");
+  d["width"] = Y.section.width, d["thickness"] = Y.section.thickness;
+  d["E"] = M.E, d["rho"] = M.rho, d["area"] = M.area, d["damping"] = M.dampingRatio;
+  d["failure_strain"] = M.failureStrain, d["tension_only"] = M.tensionOnly;
+  return d;
+}
+bp::dict energyDict(FabricEngine& e) {
+  const EnergyBooks b = e.dynamics().energy();
+  bp::dict d;
+  d["kinetic"] = b.kinetic, d["elastic"] = b.elastic, d["damped"] = b.damped, d["work"] = b.work;
+  d["initial"] = b.initial, d["balance_error"] = b.balanceError();
+  return d;
+}
+Vec3 reactionOf(FabricEngine& e, bp::object nodes) {
+  std::vector<Index> v;
+  for (bp::stl_input_iterator<Index> it(nodes), end; it != end; ++it) v.push_back(*it);
+  return e.dynamics().reaction(v);
+}
+bp::object syncVelocities(FabricEngine& e) {
+  Vec3Array v(e.fabric().nNodes());
+  for (Index i = 0; i < e.fabric().nNodes(); ++i) v[i] = e.dynamics().syncVelocity(i);
+  return bytesOf(v);
+}
+void runSteps(FabricEngine& e, Real dt, long n) {
+  require(n >= 0, "steps", n, "[0, inf)");
+  for (long k = 0; k < n; ++k) e.step(dt);
+}
+void saveStatePy(FabricEngine& e, const std::string& path, bool lastGood) {
+  saveState(path, lastGood ? e.lastGoodState() : e.state());
+}
+void loadStatePy(FabricEngine& e, const std::string& path) {
+  e.setState(loadState(path, e.fabric().nNodes()));
+}
+void fixNode(FabricEngine& e, Index i) { e.dynamics().fix(i); }
+void prescribe(FabricEngine& e, Index i, const Vec3& v) { e.dynamics().prescribeVelocity(i, v); }
+void releaseNode(FabricEngine& e, Index i) { e.dynamics().release(i); }
+void pointForce(FabricEngine& e, Index i, const Vec3& F) { e.dynamics().setPointForce(i, F); }
+void gravity(FabricEngine& e, const Vec3& g) { e.dynamics().setBodyAcceleration(g); }
+Vec3 getGravity(FabricEngine& e) { return e.dynamics().loads().bodyAcceleration; }
+Real blowup(FabricEngine& e) { return e.dynamics().limits.blowupFactor; }
+void setBlowup(FabricEngine& e, Real f) {
+  require(std::isfinite(f) && f > 1, "blowup_factor", f, "(1, inf)");
+  e.dynamics().limits.blowupFactor = f;
+}
+long checkpointInterval(FabricEngine& e) { return e.dynamics().limits.checkpointInterval; }
+void setCheckpointInterval(FabricEngine& e, long k) {
+  require(k >= 1, "checkpoint_interval", k, "[1, inf) steps");
+  e.dynamics().limits.checkpointInterval = k;
+}
+bool isKinematic(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.dynamics().isKinematic(i); }
+
+}  // namespace
+
+BOOST_PYTHON_MODULE(_woven) {
+  bp::docstring_options doc(true, true, false);
+  g_instabilityType = PyErr_NewExceptionWithDoc(
+      "woven._woven.InstabilityError",
+      "The simulation went unstable; attributes step, node, element (-1 if none) and cause.",
+      PyExc_RuntimeError, nullptr);
+  bp::scope().attr("InstabilityError") = bp::handle<>(bp::borrowed(g_instabilityType));
+  bp::register_exception_translator<ParameterError>(&translateParameterError);
+  bp::register_exception_translator<InstabilityError>(&translateInstability);
+
+  bp::class_<Pattern>("Pattern", "Interlacing matrix: entry (i, j) = 1 where warp i passes over weft j.", bp::no_init)
+      .def("__init__", bp::make_constructor(+[](bp::object m) { return std::make_shared<Pattern>(patternFromList(m)); }))
+      .def("plain", &Pattern::plain).staticmethod("plain")
+      .def("twill", &Pattern::twill, (bp::arg("over"), bp::arg("under"))).staticmethod("twill")
+      .def("satin", &Pattern::satin, (bp::arg("n"), bp::arg("step"))).staticmethod("satin")
+      .def("basket", &Pattern::basket, (bp::arg("n"))).staticmethod("basket")
+      .def("by_name", &Pattern::byName, (bp::arg("name"), bp::arg("a") = 2, bp::arg("b") = 1)).staticmethod("by_name")
+      .add_property("rows", &Pattern::rows, "warp yarns in the repeat")
+      .add_property("cols", &Pattern::cols, "weft yarns in the repeat")
+      .add_property("matrix", &patternMatrix);
+
+  bp::class_<YarnMaterial>("YarnMaterial", "Axial material of a yarn (SI).")
+      .def_readwrite("E", &YarnMaterial::E, "Young's modulus [Pa]")
+      .def_readwrite("rho", &YarnMaterial::rho, "fibre density [kg/m^3]")
+      .def_readwrite("area", &YarnMaterial::area, "fibre cross-section area [m^2]")
+      .def_readwrite("damping", &YarnMaterial::dampingRatio, "damping ratio of the highest chain mode [-]")
+      .def_readwrite("failure_strain", &YarnMaterial::failureStrain, "strain at break [-]")
+      .def_readwrite("tension_only", &YarnMaterial::tensionOnly, "no axial force while slack [bool]")
+      .def("validate", &YarnMaterial::validate, (bp::arg("prefix") = ""));
+  bp::class_<YarnSection>("YarnSection", "Elliptic section at rest (SI).")
+      .def_readwrite("width", &YarnSection::width, "[m]")
+      .def_readwrite("thickness", &YarnSection::thickness, "[m]");
+
+  bp::class_<PeirceState>("PeirceState", "Peirce's plain-weave geometry of one yarn family (SI).")
+      .def_readonly("p", &PeirceState::p).def_readonly("h", &PeirceState::h).def_readonly("D", &PeirceState::D)
+      .def_readonly("theta", &PeirceState::theta).def_readonly("l", &PeirceState::l)
+      .add_property("crimp", &PeirceState::crimp);
+  bp::def("peirce_from_height", &peirceFromHeight, (bp::arg("p"), bp::arg("h"), bp::arg("D")),
+          "Peirce geometry from spacing p [m], crimp height h [m] and D = d1 + d2 [m].");
+  bp::def("peirce_from_crimp", &peirceFromCrimp, (bp::arg("p"), bp::arg("crimp"), bp::arg("D")),
+          "Peirce geometry from spacing p [m], crimp [-] and D = d1 + d2 [m].");
+
+  bp::class_<WeaveParams>("WeaveParams", "Weave builder parameters (SI); see woven.weave for the keys.")
+      .def_readwrite("pattern", &WeaveParams::pattern)
+      .def_readwrite("nx", &WeaveParams::nx).def_readwrite("ny", &WeaveParams::ny)
+      .def_readwrite("warp_spacing", &WeaveParams::warpSpacing).def_readwrite("weft_spacing", &WeaveParams::weftSpacing)
+      .def_readwrite("warp_section", &WeaveParams::warpSection).def_readwrite("weft_section", &WeaveParams::weftSection)
+      .def_readwrite("warp_material", &WeaveParams::warpMaterial).def_readwrite("weft_material", &WeaveParams::weftMaterial)
+      .def_readwrite("warp_crimp", &WeaveParams::warpCrimp).def_readwrite("weft_crimp", &WeaveParams::weftCrimp)
+      .def_readwrite("cp_per_span", &WeaveParams::cpPerSpan)
+      .def("validate", &WeaveParams::validate);
+  bp::def("km2_706", &km2_706, "KM2 style 706 preset parameters.");
+
+  bp::class_<WeaveSummary>("WeaveSummary", "Measured figures of a built weave (SI).")
+      .def_readonly("warp_yarns", &WeaveSummary::warpYarns).def_readonly("weft_yarns", &WeaveSummary::weftYarns)
+      .def_readonly("nodes", &WeaveSummary::nodes).def_readonly("elements", &WeaveSummary::elements)
+      .def_readonly("warp_peirce", &WeaveSummary::warpPeirce).def_readonly("weft_peirce", &WeaveSummary::weftPeirce)
+      .def_readonly("warp_crimp_built", &WeaveSummary::warpCrimpBuilt)
+      .def_readonly("weft_crimp_built", &WeaveSummary::weftCrimpBuilt)
+      .def_readonly("areal_density", &WeaveSummary::arealDensity, "[kg/m^2]")
+      .def_readonly("required_gap", &WeaveSummary::requiredGap, "[m]")
+      .def_readonly("min_vertical_gap", &WeaveSummary::minVerticalGap, "[m]")
+      .def_readonly("min_chain_clearance", &WeaveSummary::minChainClearance, "[m]")
+      .def_readonly("length_x", &WeaveSummary::lengthX).def_readonly("length_y", &WeaveSummary::lengthY);
+  bp::def("build_weave", &buildWeavePy, (bp::arg("params")),
+          "Builds a weave: returns (FabricEngine, WeaveSummary, warp yarn indices, weft yarn indices).");
+
+  bp::class_<Fabric>("Fabric", "A set of yarns to simulate; add yarns, then make a FabricEngine.")
+      .def("add_yarn", &addYarn, (bp::arg("points"), bp::arg("material"), bp::arg("section")),
+           "Appends a yarn through the node positions [m] (Vector3 list); returns its index.")
+      .add_property("n_nodes", &Fabric::nNodes).add_property("n_elements", &Fabric::nElems)
+      .add_property("n_yarns", &Fabric::nYarns);
+
+  bp::register_ptr_to_python<std::shared_ptr<FabricEngine>>();
+  bp::class_<FabricEngine, boost::noncopyable>("FabricEngine", "The fabric and its step (SI).", bp::no_init)
+      .def("__init__", bp::make_constructor(&makeEngine))
+      .add_property("n_nodes", +[](FabricEngine& e) { return e.fabric().nNodes(); })
+      .add_property("n_elements", +[](FabricEngine& e) { return e.fabric().nElems(); })
+      .add_property("n_yarns", +[](FabricEngine& e) { return e.fabric().nYarns(); })
+      .add_property("dt_crit", &FabricEngine::criticalDt, "critical time step [s]")
+      .add_property("time", +[](FabricEngine& e) { return e.dynamics().time(); }, "simulated time [s]")
+      .add_property("iter", +[](FabricEngine& e) { return e.dynamics().stepCount(); }, "steps taken")
+      .add_property("blowup_factor", &blowup, &setBlowup)
+      .add_property("checkpoint_interval", &checkpointInterval, &setCheckpointInterval)
+      .add_property("gravity", &getGravity, &gravity, "body acceleration [m/s^2]")
+      .def("step", &FabricEngine::step, (bp::arg("dt")), "One step of dt [s] (refused above dt_crit).")
+      .def("run", &runSteps, (bp::arg("dt"), bp::arg("steps")), "steps steps of dt [s], in C++.")
+      .def("pos", &nodePos, (bp::arg("node")), "position [m]")
+      .def("vel", &nodeVel, (bp::arg("node")), "velocity at the current step [m/s]")
+      .def("set_pos", &setNodePos, (bp::arg("node"), bp::arg("position")))
+      .def("set_vel", &setNodeVel, (bp::arg("node"), bp::arg("velocity")))
+      .def("mass", &nodeMass, (bp::arg("node")), "lumped node mass [kg]")
+      .def("element_nodes", &elementNodes, (bp::arg("element")))
+      .def("yarn", &yarnInfo, (bp::arg("yarn")))
+      .def("fix", &fixNode, (bp::arg("node")))
+      .def("prescribe_velocity", &prescribe, (bp::arg("node"), bp::arg("velocity")), "[m/s]")
+      .def("release", &releaseNode, (bp::arg("node")))
+      .def("is_kinematic", &isKinematic, (bp::arg("node")))
+      .def("set_point_force", &pointForce, (bp::arg("node"), bp::arg("force")), "[N]")
+      .def("reaction", &reactionOf, (bp::arg("nodes")), "support force on these kinematic nodes [N]")
+      .def("energy", &energyDict, "kinetic, elastic, damped, work, initial, balance_error [J]")
+      .def("_positions", +[](FabricEngine& e) { return bytesOf(e.fabric().pos); })
+      .def("_velocities", &syncVelocities)
+      .def("_strains", +[](FabricEngine& e) { return bytesOf(e.fabric().strain); })
+      .def("_tensions", +[](FabricEngine& e) { return bytesOf(e.fabric().tension); })
+      .def("_masses", +[](FabricEngine& e) { return bytesOf(e.fabric().mass); })
+      .def("_rest_lengths", +[](FabricEngine& e) { return bytesOf(e.fabric().restLength); })
+      .def("_element_first_nodes", +[](FabricEngine& e) { return bytesOf(e.fabric().elem0); })
+      .def("save_state", &saveStatePy, (bp::arg("path"), bp::arg("last_good") = false),
+           "Writes positions and velocities, bit for bit (last_good: the last state that passed the checks).")
+      .def("load_state", &loadStatePy, (bp::arg("path")))
+      .def("restore_last_good", +[](FabricEngine& e) { e.dynamics().restoreLastGood(); });
+}
