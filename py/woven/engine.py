@@ -44,6 +44,7 @@ def attach(engine, set_dt=True, safety=0.9, label=None, append=True):
     key = id(engine)
     _registry[key] = engine
     runner = yade.wrapper.PyRunner(command='__import__("woven.engine").engine._step(%d)' % key, iterPeriod=1)
+    runner.initRun = True  # also at O.iter 0, so the fabric's steps equal O.iter (a constructor keyword is ignored)
     if label:
         runner.label = label
     if append:

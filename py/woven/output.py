@@ -12,6 +12,8 @@ def out_dir(name, params):
 
 
 def _clean(x):
+    if hasattr(x, 'item') and not isinstance(x, (list, tuple, dict)):  # numpy scalars
+        x = x.item()
     if isinstance(x, float) and not math.isfinite(x):
         return str(x)
     if isinstance(x, dict):

@@ -39,6 +39,12 @@ def _convert(key, text, default):
             return int(f)
         if isinstance(default, float):
             return float(t)
+        if default is None:  # no default: a number if it reads as one, else text
+            for cast in (int, float):
+                try:
+                    return cast(t)
+                except ValueError:
+                    pass
         return t
     except ValueError:
         kind = {bool: '0/1/true/false', int: 'an integer', float: 'a number'}.get(type(default), 'text')

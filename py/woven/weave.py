@@ -124,4 +124,6 @@ def weave(**kw):
     if a['cp_per_span'] is not None:
         P.cp_per_span = int(a['cp_per_span'])
     engine, s, warp, weft = _woven.build_weave(P)
-    return Weave(engine, _summary_dict(s), list(warp), list(weft), a, pat)
+    summary = _summary_dict(s)
+    summary['cp_per_span'] = P.cp_per_span
+    return Weave(engine, summary, list(warp), list(weft), a, pat)

@@ -1,0 +1,159 @@
+# Smith's transverse impact of a single yarn (physics-reference.md), run inside YADE's loop.
+#   yade -n -x scripts/smith.py [V=200] [E=90e9] [rho=1440] [length=0.2] [elements=4000] [levels=4] [out=DIR]
+# A straight yarn along x, both ends fixed; its middle node is driven along y at speed V from t = 0.
+# Measured behind the fronts and compared with Smith's theory: the strain eps (within 1 %) and the
+# lab-frame transverse wave speed U_E (within 3 %), at `elements` and at coarser resolutions
+# (elements/2, /4, ...) to show convergence with element length.
+# Output: out/smith/summary.json, convergence.csv, profile.csv, smith.png
+import math
+import os
+import sys
+
+import numpy as np
+import woven
+from woven.params import read_params
+from woven.output import out_dir, write_summary
+
+p = read_params({
+    'V': (200.0, 'm/s', 'transverse speed of the struck point'),
+    'E': (90e9, 'Pa', "Young's modulus"),
+    'rho': (1440.0, 'kg/m^3', 'density'),
+    'area': (4.63e-8, 'm^2', 'fibre cross-section area (does not change strains or speeds)'),
+    'length': (0.2, 'm', 'yarn length'),
+    'elements': (4000, '', 'CPs at the finest resolution (even)'),
+    'levels': (4, '', 'resolutions: elements, elements/2, ... (levels of them)'),
+    'duration': (0.8, '', 'simulated time as a fraction of the time the longitudinal front needs to reach an end'),
+    'safety': (0.9, '', 'O.dt = safety * dt_crit'),
+    'strain_tol': (0.01, '', 'allowed relative strain error at the finest resolution'),
+    'speed_tol': (0.03, '', 'allowed relative U_E error at the finest resolution'),
+    'out': ('', '', 'output folder (default out/smith)'),
+})
+for k, lo in (('V', 0), ('E', 0), ('rho', 0), ('length', 0), ('area', 0)):
+    if not p[k] > lo:
+        raise ValueError('%s = %r is invalid: allowed (0, inf) %s' % (k, p[k], p.units[k]))
+if p.elements < 16 or p.elements % 2:
+    raise ValueError('elements = %r is invalid: allowed an even number >= 16' % p.elements)
+if not (1 <= p.levels <= 8 and p.elements >> (p.levels - 1) >= 16):
+    raise ValueError('levels = %r is invalid: allowed [1, 8] with elements/2^(levels-1) >= 16' % p.levels)
+if not (0 < p.duration <= 0.95):
+    raise ValueError('duration = %r is invalid: allowed (0, 0.95]' % p.duration)
+d = out_dir('smith', p)
+th = woven.theory.smith(p.V, p.E, p.rho)
+c = th['c']
+
+
+def kink(X, t):
+    """Lab-frame position of the transverse front on the x > 0 side: the straight inclined part
+    (20-80 % of the struck point's displacement V t) fitted by a line and extended to y = 0."""
+    x, y = X[:, 0], X[:, 1]
+    sel = (x > 0) & (y > 0.2 * p.V * t) & (y < 0.8 * p.V * t)
+    a, b = np.polyfit(x[sel], y[sel], 1)
+    return -b / a
+
+
+def run(n):
+    """One resolution: returns measured strain, U_E, and the final profile."""
+    O.reset()
+    mat = woven.YarnMaterial()
+    mat.E, mat.rho, mat.area, mat.damping = p.E, p.rho, p.area, 0.0
+    sec = woven.YarnSection()
+    f = woven.Fabric()
+    L = p.length
+    f.add_yarn([Vector3(-L / 2 + L * i / n, 0, 0) for i in range(n + 1)], mat, sec)
+    eng = woven.FabricEngine(f)
+    eng.fix(0)
+    eng.fix(n)
+    mid = n // 2
+    eng.prescribe_velocity(mid, Vector3(0, p.V, 0))
+    O.engines = []
+    woven.attach(eng, set_dt=True, safety=p.safety)
+    t_end = p.duration * (L / 2) / c
+    steps = int(math.ceil(t_end / O.dt))
+    X0 = woven.positions(eng).copy()
+    O.run(steps // 2, True)
+    t1, k1 = O.time, kink(woven.positions(eng), O.time)
+    O.run(steps - steps // 2, True)
+    t2, X = O.time, woven.positions(eng).copy()
+    k2 = kink(X, t2)
+    UE = (k2 - k1) / (t2 - t1)
+    # strain in the straight part between the transverse and the longitudinal fronts (material
+    # coordinates X0), away from both fronts: the middle 60 % of that stretch
+    xk_mat = th['U_L'] * t2  # only to place the window; the figure itself is measured
+    xl = c * t2
+    e = woven.strains(eng)
+    xm = 0.5 * (X0[:-1, 0] + X0[1:, 0])
+    lo, hi = xk_mat + 0.2 * (xl - xk_mat), xk_mat + 0.8 * (xl - xk_mat)
+    sel = (xm > lo) & (xm < hi)
+    strain = float(np.mean(e[sel]))
+    assert O.iter == eng.iter, 'fabric step counter must follow O.iter'
+    return {'elements': n, 'l0': L / n, 'dt': O.dt, 'steps': steps, 'time': t2, 'strain': strain,
+            'U_E': UE, 'strain_error': strain / th['strain'] - 1, 'U_E_error': UE / th['U_E'] - 1,
+            'energy_balance_error': eng.energy()['balance_error'] / max(eng.energy()['work'], 1e-300)}, X, e
+
+
+rows = []
+status = 'ok'
+try:
+    for lev in reversed(range(p.levels)):
+        r, X, e = run(p.elements >> lev)
+        rows.append(r)
+        print('smith: %5d elements  l0 = %.3g m  strain %.6f (theory %.6f, %+.3f %%)  U_E %.1f m/s (theory %.1f, %+.3f %%)'
+              % (r['elements'], r['l0'], r['strain'], th['strain'], 100 * r['strain_error'], r['U_E'], th['U_E'],
+                 100 * r['U_E_error']))
+except woven.InstabilityError as ex:
+    status = 'unstable'
+    print('smith: unstable:', ex)
+except RuntimeError as ex:
+    status = 'unstable' if isinstance(woven.engine.last_error, woven.InstabilityError) else 'failed'
+    print('smith: run stopped:', woven.engine.last_error or ex)
+
+with open(os.path.join(d, 'convergence.csv'), 'w') as fh:
+    keys = ['elements', 'l0', 'dt', 'steps', 'time', 'strain', 'U_E', 'strain_error', 'U_E_error', 'energy_balance_error']
+    fh.write(','.join(keys) + '\n')
+    for r in rows:
+        fh.write(','.join('%.10g' % r[k] for k in keys) + '\n')
+
+checks = {}
+measured = {}
+if rows:
+    fine = rows[-1]
+    measured = {'strain': fine['strain'], 'U_E': fine['U_E'], 'elements': fine['elements'], 'l0': fine['l0'],
+                'convergence': rows}
+    checks = {
+        'strain': {'value': abs(fine['strain_error']), 'limit': p.strain_tol, 'passed': abs(fine['strain_error']) <= p.strain_tol,
+                   'what': 'relative error of the strain behind the longitudinal front'},
+        'U_E': {'value': abs(fine['U_E_error']), 'limit': p.speed_tol, 'passed': abs(fine['U_E_error']) <= p.speed_tol,
+                'what': 'relative error of the lab-frame transverse wave speed'},
+    }
+    np.savetxt(os.path.join(d, 'profile.csv'), X, delimiter=',', header='x_m,y_m,z_m', comments='')
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.5))
+    a1.plot(X[:, 0] * 1e3, X[:, 1] * 1e3, 'k-', lw=1)
+    a1.axvline(th['U_E'] * fine['time'] * 1e3, color='r', ls='--', label='Smith U_E t')
+    a1.set_xlim(-3 * th['U_E'] * fine['time'] * 1e3, 3 * th['U_E'] * fine['time'] * 1e3)
+    a1.set_xlabel('x [mm]')
+    a1.set_ylabel('y [mm]')
+    a1.set_title('yarn at t = %.3g us' % (fine['time'] * 1e6))
+    a1.legend()
+    ls = [r['l0'] * 1e3 for r in rows]
+    a2.loglog(ls, [max(abs(r['strain_error']), 1e-6) for r in rows], 'o-', label='|strain error|')
+    a2.loglog(ls, [max(abs(r['U_E_error']), 1e-6) for r in rows], 's-', label='|U_E error|')
+    a2.axhline(p.strain_tol, color='C0', ls=':')
+    a2.axhline(p.speed_tol, color='C1', ls=':')
+    a2.set_xlabel('element length l0 [mm]')
+    a2.set_ylabel('relative error vs Smith')
+    a2.set_title('convergence, V = %g m/s' % p.V)
+    a2.legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(d, 'smith.png'), dpi=110)
+    if status == 'ok' and not all(ch['passed'] for ch in checks.values()):
+        status = 'failed'
+
+reference = {'strain': th['strain'], 'U_E': th['U_E'], 'U_L': th['U_L'], 'w': th['w'], 'c': c}
+units = {'strain': '-', 'U_E': 'm/s', 'U_L': 'm/s', 'w': 'm/s', 'c': 'm/s', 'l0': 'm', 'elements': '-'}
+write_summary(d, 'smith', p, measured, reference, units, status, checks)
+print('smith: %s -> %s' % (status, d))
+if status != 'ok':
+    sys.exit(1)
