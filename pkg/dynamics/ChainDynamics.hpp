@@ -20,7 +20,10 @@ namespace woven {
 Real criticalTimeStep(const Fabric& f);
 
 struct InstabilityLimits {
-  Real blowupFactor = 3.0;        ///< stop if kinetic+elastic+damped > factor*(initial+|work|)+floor
+  /// Stop if kinetic+elastic+damped > factor*(initial+|work|)/(1-(dt/dt_crit)^2) + floor (the
+  /// 1/(1-(dt/dt_crit)^2) is how far a stable step lets the energy of a linear chain oscillate above
+  /// the scheme's invariant; it is 1 for dt >= dt_crit).
+  Real blowupFactor = 3.0;
   Real energyFloor = 1e-300;      ///< [J]
   long checkpointInterval = 100;  ///< steps between copies of the last good state
 };
@@ -81,6 +84,7 @@ class ChainDynamics {
   long step_ = 0;
   Real time_ = 0;
   Real dtPrev_ = 0;
+  Real dtCrit_ = 0;     // criticalTimeStep of the fabric, for the blow-up budget (start, refreshForces)
   Vec3Array goodPos_, goodVel_;
   long goodStep_ = 0;
   Real goodTime_ = 0;

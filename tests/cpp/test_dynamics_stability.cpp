@@ -1,0 +1,165 @@
+// Time-step stability of the chain dynamics: the critical step l0*sqrt(rho/E)*(sqrt(1+xi^2)-xi),
+// bounded motion just below it, refusal of a larger step by the engine, and detection of the
+// blow-up (InstabilityError) when ChainDynamics is driven beyond it.
+#include "chain_util.hpp"
+#include "dynamics/ChainDynamics.hpp"
+#include "engine/FabricEngine.hpp"
+#include <gtest/gtest.h>
+#include <cmath>
+
+using namespace woven_test;
+using woven::ChainDynamics;
+using woven::FabricEngine;
+using woven::InstabilityError;
+
+TEST(DynamicsStability, CriticalStepOfAUniformChain) {
+  const Real l0 = 0.37e-3;
+  for (Real xi : {0.0, 0.1, 0.5, 2.0}) {
+    const YarnMaterial m = km2Material(xi);
+    const Fabric f = straightChain(20, l0, m);
+    // Central differences: dt_crit = 2/omega_max, omega_max = 2 sqrt(K/m_e) (alternating mode),
+    // lowered by the damping ratio xi of that mode.
+    const Real expected = l0 * std::sqrt(m.rho / m.E) * (std::sqrt(1 + xi * xi) - xi);
+    EXPECT_LT(rel(woven::criticalTimeStep(f), expected), 1e-12) << "xi = " << xi;
+    FabricEngine eng{Fabric(f)};
+    EXPECT_LT(rel(eng.criticalDt(), expected), 1e-12) << "xi = " << xi;
+  }
+  // Non-uniform chain: the shortest element decides.
+  Fabric f;
+  const YarnMaterial m = km2Material();
+  f.addYarn({Vec3(0, 0, 0), Vec3(1e-3, 0, 0), Vec3(1.2e-3, 0, 0), Vec3(2e-3, 0, 0)}, m, YarnSection());
+  EXPECT_LT(rel(woven::criticalTimeStep(f), 0.2e-3 * std::sqrt(m.rho / m.E)), 1e-12);
+}
+
+TEST(DynamicsStability, BoundedJustBelowTheCriticalStep) {
+  // Linear chain (springs act in compression too, motion along the axis only), free ends: its
+  // highest mode has exactly omega_max = 2/dt_crit, the hardest case for the scheme.
+  const int N = 200;
+  const Real l0 = 1e-3;
+  Fabric f = straightChain(N, l0, km2Material(0.0, /*tensionOnly=*/false));
+  // 20 m/s: strains ~ 20/c = 2.5e-3, linear (no element comes near zero length) but large enough
+  // that rounding of the positions (eps * 0.2 m) is ~1e-12 of the vibration amplitude.
+  randomVelocities(f, 42, 20.0, Vec3(1, 0, 0));
+  FabricEngine eng(std::move(f));
+  auto& dyn = eng.dynamics();
+  const Real s = 0.99, dt = s * eng.criticalDt();
+  const Fabric& fab = eng.fabric();
+  dyn.refreshForces();
+  // Exact quadratic invariant of velocity Verlet on a linear system (per mode
+  // v^2 + omega^2 (1 - omega^2 dt^2/4) x^2): I = kinetic + elastic - dt^2/8 sum |f_i|^2/m_i.
+  // For s < 1 it is positive definite and E = kinetic + elastic <= I/(1 - s^2) <= E0/(1 - s^2).
+  auto invariant = [&] {
+    const auto b = dyn.energy();
+    Real g = 0;
+    for (Index i = 0; i < fab.nNodes(); ++i) g += fab.invMass[i] * fab.force[i].squaredNorm();
+    return b.kinetic + b.elastic - dt * dt / 8 * g;
+  };
+  const auto b0 = dyn.energy();
+  const Real E0 = b0.kinetic + b0.elastic, I0 = invariant();
+  Real maxE = 0, maxIErr = 0;
+  EXPECT_NO_THROW({
+    for (int k = 0; k < 20000; ++k) {
+      dyn.step(dt);
+      const auto b = dyn.energy();
+      maxE = std::max(maxE, b.kinetic + b.elastic);
+      maxIErr = std::max(maxIErr, std::abs(invariant() - I0));
+    }
+  });
+  EXPECT_EQ(dyn.stepCount(), 20000);
+  // Bounded: the invariant holds to rounding (a random walk of ~1e-12 per step, amplified up to 50x
+  // by the near-critical mode: 1e-9 of E0 after 2e4 steps), and the energy stays within the stable
+  // bound E0/(1 - s^2) = 50 E0.
+  EXPECT_LT(maxIErr, 1e-9 * E0);
+  EXPECT_LE(I0, E0 * (1 + 1e-12));
+  EXPECT_LT(maxE, E0 / (1 - s * s)) << "max E/E0 = " << maxE / E0;
+}
+
+TEST(DynamicsStability, EngineRefusesAStepAboveCritical) {
+  Fabric f = straightChain(50, 1e-3);
+  randomVelocities(f, 5, 1.0);
+  FabricEngine eng(std::move(f));
+  eng.step(0.5 * eng.criticalDt());
+  const Vec3Array before = eng.fabric().pos;
+  const Vec3Array vbefore = eng.fabric().vel;
+  const long stepBefore = eng.dynamics().stepCount();
+  EXPECT_EQ(parameterOf([&] { eng.step(1.01 * eng.criticalDt()); }), "dt");
+  EXPECT_EQ(parameterOf([&] { eng.step(0.0); }), "dt");
+  EXPECT_EQ(parameterOf([&] { eng.step(-1e-9); }), "dt");
+  EXPECT_EQ(parameterOf([&] { eng.step(NAN); }), "dt");
+  // Nothing moved.
+  EXPECT_EQ(eng.dynamics().stepCount(), stepBefore);
+  for (Index i = 0; i < eng.fabric().nNodes(); ++i) {
+    EXPECT_EQ(eng.fabric().pos[i], before[i]) << "node " << i;
+    EXPECT_EQ(eng.fabric().vel[i], vbefore[i]) << "node " << i;
+  }
+  EXPECT_NO_THROW(eng.step(eng.criticalDt()));  // the limit itself is accepted
+}
+
+TEST(DynamicsStability, BlowUpAboveCriticalIsDetected) {
+  const int N = 100;
+  Fabric f = straightChain(N, 1e-3);
+  randomVelocities(f, 9, 1.0);
+  ChainDynamics dyn(f);
+  const Real dt = 1.5 * woven::criticalTimeStep(f);
+  // At 1.5 dt_crit the alternating mode is amplified by |r| = 6.85 per step (r + 1/r = 2 - 9), its
+  // energy by ~47: from any share above 1e-40 it passes 3x the initial energy within 30 steps.
+  long thrown = -1;
+  try {
+    for (int k = 0; k < 1000; ++k) dyn.step(dt);
+  } catch (const InstabilityError& e) {
+    thrown = e.step();
+    EXPECT_GE(e.node(), 0);
+    EXPECT_LT(e.node(), f.nNodes());
+    EXPECT_FALSE(e.cause().empty());
+  }
+  EXPECT_GT(thrown, 0);
+  EXPECT_LE(thrown, 30);
+  for (const Vec3& p : dyn.lastGoodPos()) EXPECT_TRUE(p.allFinite());
+  EXPECT_EQ(dyn.lastGoodPos().size(), f.pos.size());
+  EXPECT_LT(dyn.lastGoodStep(), thrown);
+}
+
+TEST(DynamicsStability, NonFiniteVelocityIsReportedAtItsNode) {
+  for (Index k : {0, 17, 40}) {
+    Fabric f = straightChain(40, 1e-3);
+    randomVelocities(f, 2, 0.1);
+    ChainDynamics dyn(f);
+    const Real dt = 0.9 * woven::criticalTimeStep(f);
+    for (int s = 0; s < 10; ++s) dyn.step(dt);
+    f.vel[k].y() = NAN;
+    try {
+      dyn.step(dt);
+      ADD_FAILURE() << "no InstabilityError for a NaN velocity on node " << k;
+    } catch (const InstabilityError& e) {
+      const bool atNode = e.node() == k;
+      const bool atElement = e.element() >= 0 && (e.element() == k || e.element() == k - 1);
+      EXPECT_TRUE(atNode || atElement) << e.what();
+      EXPECT_EQ(e.step(), 11);
+    }
+    for (const Vec3& p : dyn.lastGoodPos()) EXPECT_TRUE(p.allFinite());
+  }
+}
+
+// Known problem, disabled until the scheme handles slack/taut switching: with tension-only yarns a
+// random velocity field makes elements go slack and taut every few steps, and the kink of the force
+// at l = l0 pumps energy in. Measured (N = 200, axial field, 2e4 steps, blow-up check off): max E/E0
+// = 1.02 at 0.3 dt_crit, 1.2 at 0.5, 7.2 at 0.8, 185 at 0.9; with N = 2000 at 0.8 dt_crit, 2e11.
+// Each linear piece of the motion is stable (omega <= 2/dt_crit), so a stable scheme would stay
+// below E0/(1 - s^2) as the linear chain does above.
+TEST(DynamicsStability, DISABLED_TensionOnlyRandomFieldBoundedBelowCritical) {
+  Fabric f = straightChain(200, 1e-3, km2Material(0.0, /*tensionOnly=*/true));
+  randomVelocities(f, 42, 20.0, Vec3(1, 0, 0));
+  FabricEngine eng(std::move(f));
+  const Real s = 0.9, dt = s * eng.criticalDt();
+  const auto b0 = eng.dynamics().energy();
+  const Real E0 = b0.kinetic + b0.elastic;
+  Real maxE = 0;
+  EXPECT_NO_THROW({
+    for (int k = 0; k < 20000; ++k) {
+      eng.step(dt);
+      const auto b = eng.dynamics().energy();
+      maxE = std::max(maxE, b.kinetic + b.elastic);
+    }
+  });
+  EXPECT_LT(maxE, E0 / (1 - s * s)) << "max E/E0 = " << maxE / E0;
+}

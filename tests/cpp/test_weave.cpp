@@ -1,0 +1,192 @@
+// Weave builder (pkg/weave/WeaveBuilder.hpp): the KM2 preset against its datasheet and Peirce,
+// crossing clearance for every preset pattern and a random one, seamless replication, mass
+// bookkeeping, and the ParameterError raised for each kind of invalid input.
+#include "core/Errors.hpp"
+#include "weave/WeaveBuilder.hpp"
+#include <gtest/gtest.h>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <random>
+#include <string>
+
+using woven::Fabric;
+using woven::Index;
+using woven::Pattern;
+using woven::Real;
+using woven::Vec3;
+using woven::Weave;
+using woven::WeaveParams;
+
+namespace {
+
+Real rel(Real a, Real b) { return std::abs(a - b) / std::abs(b); }
+
+std::string parameterOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const woven::ParameterError& e) {
+    return e.parameter();
+  }
+  return "";
+}
+
+// A random 0/1 matrix that is a valid pattern (seeded; invalid draws are rejected).
+Pattern randomPattern(std::mt19937& rng) {
+  std::uniform_int_distribution<int> size(2, 6), bit(0, 1);
+  for (;;) {
+    std::vector<std::vector<int>> m(size(rng));
+    const int cols = size(rng);
+    for (auto& r : m) {
+      r.resize(cols);
+      for (int& v : r) v = bit(rng);
+    }
+    try {
+      return Pattern(m);
+    } catch (const woven::ParameterError&) {
+    }
+  }
+}
+
+// Smallest distance between any two nodes of the fabric, by a sweep along x.
+Real minNodeDistance(const Fabric& f) {
+  std::vector<Index> order(f.nNodes());
+  for (Index i = 0; i < f.nNodes(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](Index a, Index b) { return f.pos[a].x() < f.pos[b].x(); });
+  Real best = INFINITY;
+  for (std::size_t k = 0; k < order.size(); ++k)
+    for (std::size_t q = k + 1; q < order.size(); ++q) {
+      if (f.pos[order[q]].x() - f.pos[order[k]].x() >= best) break;
+      best = std::min(best, (f.pos[order[q]] - f.pos[order[k]]).norm());
+    }
+  return best;
+}
+
+}  // namespace
+
+TEST(Weave, Km2ArealDensityAndCrimp) {
+  const WeaveParams P = woven::km2_706();
+  const Weave w = woven::buildWeave(P);
+  const auto& S = w.summary;
+  // Datasheet: KM2 style 706 weighs 180 g/m^2; within 1 %.
+  EXPECT_LT(rel(S.arealDensity, 0.180), 0.01) << S.arealDensity;
+  // Closed form: each family puts rho*A*(1 + crimp) of yarn per unit length over each spacing.
+  const Real closed = P.warpMaterial.rho * P.warpMaterial.area * (1 + S.warpCrimpBuilt) / P.warpSpacing +
+                      P.weftMaterial.rho * P.weftMaterial.area * (1 + S.weftCrimpBuilt) / P.weftSpacing;
+  EXPECT_LT(rel(S.arealDensity, closed), 1e-9);
+  // The CP chords cut Peirce's arcs: built crimp within 3 % (relative) of Peirce's crimp.
+  EXPECT_GT(S.warpPeirce.crimp(), 0);
+  EXPECT_LT(rel(S.warpCrimpBuilt, S.warpPeirce.crimp()), 0.03) << S.warpCrimpBuilt << " vs " << S.warpPeirce.crimp();
+  EXPECT_LT(rel(S.weftCrimpBuilt, S.weftPeirce.crimp()), 0.03) << S.weftCrimpBuilt << " vs " << S.weftPeirce.crimp();
+}
+
+TEST(Weave, CrossingsClearForEveryPatternAndResolution) {
+  std::mt19937 rng(20240611);
+  const std::vector<std::pair<std::string, Pattern>> patterns = {
+      {"plain", Pattern::plain()},          {"twill 2/1", Pattern::twill(2, 1)},
+      {"twill 3/1", Pattern::twill(3, 1)},  {"satin 5/2", Pattern::satin(5, 2)},
+      {"basket 2", Pattern::basket(2)},     {"random", randomPattern(rng)}};
+  for (const auto& [name, pattern] : patterns)
+    for (int cp : {1, 2, 3, 4, 8})
+      for (int nx : {1, 3})
+        for (int ny : {1, 3}) {
+          SCOPED_TRACE(name + ", cpPerSpan " + std::to_string(cp) + ", nx " + std::to_string(nx) + ", ny " +
+                       std::to_string(ny));
+          WeaveParams P = woven::km2_706();
+          P.pattern = pattern, P.cpPerSpan = cp, P.nx = nx, P.ny = ny;
+          const Weave w = woven::buildWeave(P);
+          const auto& S = w.summary;
+          ASSERT_EQ(S.warpYarns, ny * pattern.rows());
+          ASSERT_EQ(S.weftYarns, nx * pattern.cols());
+          // Required: centre lines at a crossing at least (t_warp + t_weft)/2 apart.
+          EXPECT_EQ(S.requiredGap, 0.5 * (P.warpSection.thickness + P.weftSection.thickness));
+          EXPECT_GE(S.minVerticalGap, S.requiredGap - 1e-9);
+          // Two straight CPs leave each crossing node, tilted at most by the weave angle (the
+          // chord slope of Peirce's profile never exceeds tan(theta)): lines through points g
+          // apart along z with directions (1, 0, a) and (0, 1, b) are g/sqrt(1 + a^2 + b^2) apart.
+          const Real tw = std::tan(S.warpPeirce.theta), tf = std::tan(S.weftPeirce.theta);
+          EXPECT_GE(S.minChainClearance, S.requiredGap / std::sqrt(1 + tw * tw + tf * tf) - 1e-12);
+          EXPECT_LE(S.minChainClearance, S.minVerticalGap + 1e-15);  // the crossing nodes themselves
+        }
+}
+
+TEST(Weave, ReplicationIsSeamless) {
+  std::mt19937 rng(7);
+  for (const Pattern& pattern : {Pattern::plain(), Pattern::twill(2, 1), Pattern::satin(5, 2), randomPattern(rng)})
+    for (int cp : {1, 2, 3, 4}) {
+      SCOPED_TRACE(std::to_string(pattern.rows()) + "x" + std::to_string(pattern.cols()) + " pattern, cpPerSpan " +
+                   std::to_string(cp));
+      WeaveParams P = woven::km2_706();
+      P.pattern = pattern, P.cpPerSpan = cp, P.nx = 3, P.ny = 3;
+      const Weave w = woven::buildWeave(P);
+      const Fabric& f = w.fabric;
+      Index nodes = 0, elems = 0;
+      for (const auto& y : f.yarns) nodes += y.nNodes, elems += y.nElems;
+      EXPECT_EQ(f.nNodes(), nodes);
+      EXPECT_EQ(f.nElems(), elems);
+      EXPECT_EQ(w.summary.nodes, nodes);
+      EXPECT_EQ(w.summary.elements, elems);
+      // No duplicate nodes where repeats meet (nodes are ~ spacing/cpPerSpan = 0.19 mm apart).
+      EXPECT_GT(minNodeDistance(f), 1e-9);
+
+      // Periodicity: shifting by one repeat (n*C nodes of a warp, n*R of a weft) moves a node by
+      // C*weftSpacing in x (R*warpSpacing in y); positions to 1e-12 m (coordinates ~1e-2 m carry
+      // rounding ~1e-18 m), rest lengths to 1e-12 relative.
+      const int n = cp, C = pattern.cols(), R = pattern.rows();
+      auto checkYarn = [&](Index yi, int period, const Vec3& shift) {
+        const auto& y = f.yarns[yi];
+        for (Index k = 0; k + period < y.nNodes; ++k) {
+          const Vec3 d = f.pos[y.firstNode + k + period] - (f.pos[y.firstNode + k] + shift);
+          ASSERT_LT(d.norm(), 1e-12) << "yarn " << yi << " node " << k;
+        }
+        for (Index k = 0; k + period < y.nElems; ++k)
+          ASSERT_LT(rel(f.restLength[y.firstElem + k + period], f.restLength[y.firstElem + k]), 1e-12)
+              << "yarn " << yi << " element " << k;
+      };
+      for (Index yi : w.warpYarns) checkYarn(yi, n * C, Vec3(C * P.weftSpacing, 0, 0));
+      for (Index yi : w.weftYarns) checkYarn(yi, n * R, Vec3(0, R * P.warpSpacing, 0));
+
+      // Mass bookkeeping: the lumped node masses add up to sum over elements of rho*A*l0.
+      Real elementMass = 0;
+      for (Index e = 0; e < f.nElems(); ++e) {
+        const auto& m = f.materials[f.yarns[f.elemYarn[e]].material];
+        elementMass += m.rho * m.area * f.restLength[e];
+      }
+      EXPECT_LT(rel(f.totalMass(), elementMass), 1e-12);
+    }
+}
+
+TEST(Weave, BadInputNamesTheParameter) {
+  auto build = [](std::function<void(WeaveParams&)> change) {
+    return parameterOf([&] {
+      WeaveParams P = woven::km2_706();
+      change(P);
+      woven::buildWeave(P);
+    });
+  };
+  EXPECT_EQ(build([](WeaveParams& P) { P.warpSection.width = 1.1 * P.warpSpacing; }), "warp_spacing");
+  EXPECT_EQ(build([](WeaveParams& P) { P.weftSection.width = 1.1 * P.weftSpacing; }), "weft_spacing");
+  EXPECT_EQ(build([](WeaveParams& P) { P.cpPerSpan = 0; }), "cp_per_span");
+  EXPECT_EQ(build([](WeaveParams& P) { P.nx = 0; }), "nx");
+  EXPECT_EQ(build([](WeaveParams& P) { P.warpMaterial.E = -90e9; }), "warp_E");
+  EXPECT_EQ(build([](WeaveParams& P) { P.weftMaterial.rho = -1440; }), "weft_rho");
+  EXPECT_EQ(build([](WeaveParams& P) { P.warpSection.thickness = -0.11e-3; }), "warp_thickness");
+  EXPECT_EQ(build([](WeaveParams& P) { P.weftSection.thickness = 0; }), "weft_thickness");
+  EXPECT_EQ(build([](WeaveParams& P) { P.warpCrimp = 1.5; }), "warp_crimp");
+  // Crimp 0.1 % each: Peirce heights far below (t_warp + t_weft)/2 each, the yarns would overlap.
+  EXPECT_EQ(build([](WeaveParams& P) { P.warpCrimp = P.weftCrimp = 0.001; }), "warp_crimp");
+  EXPECT_EQ(build([](WeaveParams& P) { P.weftCrimp = 1.0; }), "weft_crimp");
+}
+
+TEST(Weave, OneGivenCrimpIsCompletedToTouchingYarns) {
+  // Only the weft crimp given (too small on its own): the warp takes the rest of the height,
+  // h_warp = D - h_weft, so the crossings still clear and the warp crimp follows from Peirce.
+  WeaveParams P = woven::km2_706();
+  P.weftCrimp = 0.001;
+  const Weave w = woven::buildWeave(P);
+  const auto& S = w.summary;
+  const Real D = P.warpSection.thickness + P.weftSection.thickness;
+  EXPECT_LT(rel(S.weftPeirce.crimp(), 0.001), 1e-9);
+  EXPECT_LT(rel(S.warpPeirce.h + S.weftPeirce.h, D), 1e-12);
+  EXPECT_GE(S.minVerticalGap, S.requiredGap - 1e-9);
+}

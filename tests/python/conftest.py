@@ -1,0 +1,25 @@
+"""pytest runs under Debian's /usr/bin/python3; `import woven` puts YADE's yade-double/py on
+sys.path and imports yade, so O, Vector3 and PyRunner work here as inside `yade`."""
+import json
+import os
+import subprocess
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+@pytest.fixture(scope='session')
+def yade_ns():
+    import woven  # noqa: F401  (imports yade)
+    import yade
+    return yade
+
+
+def run_scene(script, out, *args, timeout=600):
+    """Runs `yade -n -x scripts/SCRIPT key=value...` with out=OUT; returns (exit code, output, summary)."""
+    cmd = ['yade', '-n', '-x', os.path.join(ROOT, 'scripts', script), 'out=%s' % out] + list(args)
+    r = subprocess.run(cmd, cwd=str(out), capture_output=True, text=True, timeout=timeout)
+    path = os.path.join(str(out), 'summary.json')
+    summary = json.load(open(path)) if os.path.exists(path) else None
+    return r.returncode, r.stdout + r.stderr, summary

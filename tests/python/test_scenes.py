@@ -1,0 +1,58 @@
+"""Scene scripts keep the output contract (yade -n -x, key=value, out=DIR, summary.json, exit
+status) and their figures agree with theory."""
+import json
+import math
+import os
+import subprocess
+
+import pytest
+from conftest import ROOT, run_scene
+
+
+def smith_velocity(eps, E, rho):
+    """Smith's relation written forward (independent of woven.theory's bisection)."""
+    c = math.sqrt(E / rho)
+    return c * math.sqrt(2 * eps * math.sqrt(eps * (1 + eps)) - eps * eps)
+
+
+def test_smith_matches_theory(tmp_path):
+    rc, log, s = run_scene('smith.py', tmp_path, 'elements=2000', 'levels=3', 'V=300', 'E=70e9')
+    assert rc == 0, log
+    assert s['status'] == 'ok'
+    eps = s['measured']['strain']
+    # the measured strain, put back into Smith's relation, gives the impact speed within 1.5 %
+    assert smith_velocity(eps, 70e9, 1440) == pytest.approx(300, rel=0.015)
+    assert eps == pytest.approx(s['reference']['strain'], rel=0.01)
+    c = math.sqrt(70e9 / 1440)
+    assert s['measured']['U_E'] == pytest.approx(c * (math.sqrt(eps * (1 + eps)) - eps), rel=0.03)
+    conv = s['measured']['convergence']
+    assert [r['elements'] for r in conv] == [500, 1000, 2000]
+    assert abs(conv[-1]['U_E_error']) < abs(conv[0]['U_E_error'])  # converges with element length
+    assert os.path.exists(tmp_path / 'smith.png') and os.path.exists(tmp_path / 'convergence.csv')
+
+
+def test_weave_script(tmp_path):
+    rc, log, s = run_scene('weave.py', tmp_path, 'nx=4', 'ny=4', 'cp_per_span=3')
+    assert rc == 0, log
+    assert s['checks']['crossing_clearance']['passed'] and s['checks']['areal_density']['passed']
+    assert s['measured']['warp_yarns'] == 8 and s['units']['areal_density'] == 'kg/m^2'
+    assert os.path.getsize(tmp_path / 'weave.png') > 10000
+
+
+@pytest.mark.parametrize('script, arg, name', [('smith.py', 'colour=red', 'colour'), ('smith.py', 'V=-3', 'V'),
+                                               ('weave.py', 'pattern=zigzag', 'pattern')])
+def test_bad_key_fails_with_its_name(tmp_path, script, arg, name):
+    rc, log, s = run_scene(script, tmp_path, arg)
+    assert rc != 0 and name in log and 'allowed' in log
+
+
+def test_yade_batch_table(tmp_path):
+    table = tmp_path / 'smith.table'
+    table.write_text('description V elements levels out\nA 150 1000 1 %s\nB 250 1000 1 %s\n'
+                     % (tmp_path / 'A', tmp_path / 'B'))
+    r = subprocess.run(['yade-batch', '--job-threads=1', str(table), os.path.join(ROOT, 'scripts', 'smith.py')],
+                       cwd=str(tmp_path), capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stdout + r.stderr
+    for tag, V in (('A', 150.0), ('B', 250.0)):
+        s = json.load(open(tmp_path / tag / 'summary.json'))
+        assert s['parameters']['V'] == V and s['status'] == 'ok'
