@@ -1,0 +1,56 @@
+# Cost of driving the woven engine from YADE's loop, measured in one process:
+#   yade -n -x scripts/bench_pyrunner.py [nodes=1000] [iters=20000] [out=DIR]
+# Prints microseconds per iteration for: an empty YADE loop, a PyRunner doing nothing, the woven
+# adapter (PyRunner + C++ step), and the bare C++ step (FabricEngine.run); the adapter's overhead is
+# adapter - bare step, independent of the fabric size.
+import sys
+import time
+
+import woven
+from woven.params import read_params
+from woven.output import out_dir, write_summary
+
+p = read_params({'nodes': (1000, '', 'nodes of the test chain'), 'iters': (20000, '', 'iterations per figure'),
+                 'out': ('', '', 'output folder (default out/bench_pyrunner)')})
+if p.nodes < 2 or p.iters < 100:
+    raise ValueError('nodes >= 2 and iters >= 100 are allowed; got nodes=%r iters=%r' % (p.nodes, p.iters))
+d = out_dir('bench_pyrunner', p)
+
+
+def chain():
+    f = woven.Fabric()
+    f.add_yarn([Vector3(1e-4 * i, 0, 0) for i in range(p.nodes)], woven.YarnMaterial(), woven.YarnSection())
+    e = woven.FabricEngine(f)
+    e.fix(0)
+    e.prescribe_velocity(p.nodes - 1, Vector3(1, 0.5, 0))
+    return e
+
+
+def per_iter(engines):
+    O.reset()
+    O.engines = engines
+    O.dt = 1e-9
+    t = time.perf_counter()
+    O.run(p.iters, True)
+    return (time.perf_counter() - t) / p.iters * 1e6
+
+
+empty = per_iter([])
+noop = per_iter([PyRunner(command='pass', iterPeriod=1)])
+O.reset()
+O.engines = []
+e = chain()
+woven.attach(e)
+t = time.perf_counter()
+O.run(p.iters, True)
+adapter = (time.perf_counter() - t) / p.iters * 1e6
+e2 = chain()
+t = time.perf_counter()
+e2.run(0.9 * e2.dt_crit, p.iters)
+bare = (time.perf_counter() - t) / p.iters * 1e6
+res = {'empty_loop_us': empty, 'pyrunner_noop_us': noop, 'woven_adapter_us': adapter, 'bare_cpp_step_us': bare,
+       'adapter_overhead_us': adapter - bare, 'bare_node_steps_per_s': p.nodes / (bare * 1e-6)}
+for k, v in res.items():
+    print('bench_pyrunner: %-24s %12.3f' % (k, v))
+write_summary(d, 'bench_pyrunner', p, res, {'pyrunner_cost_us_quoted': 30.0},
+              {k: ('us/iteration' if k.endswith('_us') else 'node-steps/s') for k in res}, 'ok')
