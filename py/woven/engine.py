@@ -21,10 +21,11 @@ def _step(key):
         raise
 
 
-def attach(engine, set_dt=True, safety=0.9, label=None, append=True):
+def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
     """Puts `engine` (a woven.FabricEngine) into O.engines and returns the PyRunner that drives it.
 
-    set_dt: set O.dt = safety * engine.dt_crit [s] (safety in (0, 1]); otherwise O.dt must already
+    set_dt: set O.dt = safety * engine.dt_crit [s] (safety in (0, 1]; 0.7 by default because slack/taut
+            switching of tension-only yarns gains energy near dt_crit, docs/design.md); otherwise O.dt must already
             be <= engine.dt_crit, else ValueError naming dt and the allowed range (before any step).
     label:  YADE label of the PyRunner.
     append: add to the end of O.engines (else the caller places the returned PyRunner).

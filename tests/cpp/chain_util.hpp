@@ -9,6 +9,25 @@
 
 namespace woven_test {
 
+// Debug/sanitizer builds (-O0, Eigen's asserts, ASan+UBSan) run the step loop ~300x slower than
+// Release. There the long runs are shortened (same code paths, so memory and UB errors are still
+// found); the physics tolerances are met at full length in Release, where the shortened runs would
+// pass too (they are checked against the same theory, not the same numbers).
+#if defined(__SANITIZE_ADDRESS__) || !defined(NDEBUG)
+inline constexpr bool kSlowBuild = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(undefined_behavior_sanitizer)
+inline constexpr bool kSlowBuild = true;
+#else
+inline constexpr bool kSlowBuild = false;
+#endif
+#else
+inline constexpr bool kSlowBuild = false;
+#endif
+
+/// n in Release, n/slowDivisor in Debug/sanitizer builds.
+inline long runLength(long n, long slowDivisor) { return kSlowBuild ? n / slowDivisor : n; }
+
 using woven::Fabric;
 using woven::Index;
 using woven::Real;

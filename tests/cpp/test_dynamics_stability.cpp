@@ -57,18 +57,20 @@ TEST(DynamicsStability, BoundedJustBelowTheCriticalStep) {
   const auto b0 = dyn.energy();
   const Real E0 = b0.kinetic + b0.elastic, I0 = invariant();
   Real maxE = 0, maxIErr = 0;
+  const long steps = runLength(20000, 10);
   EXPECT_NO_THROW({
-    for (int k = 0; k < 20000; ++k) {
+    for (long k = 0; k < steps; ++k) {
       dyn.step(dt);
       const auto b = dyn.energy();
       maxE = std::max(maxE, b.kinetic + b.elastic);
       maxIErr = std::max(maxIErr, std::abs(invariant() - I0));
     }
   });
-  EXPECT_EQ(dyn.stepCount(), 20000);
+  EXPECT_EQ(dyn.stepCount(), steps);
   // Bounded: the invariant holds to rounding (a random walk of ~1e-12 per step, amplified up to 50x
   // by the near-critical mode: 1e-9 of E0 after 2e4 steps), and the energy stays within the stable
-  // bound E0/(1 - s^2) = 50 E0.
+  // bound E0/(1 - s^2) = 50 E0. (kinetic + elastic itself does not stay within 1 % of E0 at 0.99
+  // dt_crit, nor should it: the near-critical modes swing ~50x between I and E; max 4.7 E0 here.)
   EXPECT_LT(maxIErr, 1e-9 * E0);
   EXPECT_LE(I0, E0 * (1 + 1e-12));
   EXPECT_LT(maxE, E0 / (1 - s * s)) << "max E/E0 = " << maxE / E0;
@@ -140,26 +142,33 @@ TEST(DynamicsStability, NonFiniteVelocityIsReportedAtItsNode) {
   }
 }
 
-// Known problem, disabled until the scheme handles slack/taut switching: with tension-only yarns a
-// random velocity field makes elements go slack and taut every few steps, and the kink of the force
-// at l = l0 pumps energy in. Measured (N = 200, axial field, 2e4 steps, blow-up check off): max E/E0
-// = 1.02 at 0.3 dt_crit, 1.2 at 0.5, 7.2 at 0.8, 185 at 0.9; with N = 2000 at 0.8 dt_crit, 2e11.
-// Each linear piece of the motion is stable (omega <= 2/dt_crit), so a stable scheme would stay
-// below E0/(1 - s^2) as the linear chain does above.
-TEST(DynamicsStability, DISABLED_TensionOnlyRandomFieldBoundedBelowCritical) {
-  Fabric f = straightChain(200, 1e-3, km2Material(0.0, /*tensionOnly=*/true));
+// Tension-only yarns are piecewise linear: each piece is stable below dt_crit, but switching
+// between slack and taut pumps energy in when dt is near dt_crit (no invariant survives the kink).
+// Measured with this field (N = 200, axial, 2e4 steps, no damping, check off): max E/E0 = 1.14 at
+// 0.5 dt_crit, 1.2 at 0.7, 2e9 at 0.9; with damping ratio 0.05 at 0.9: 1.21. These are the operating
+// envelope the docs give (safety <= 0.7 undamped, or a little damping); the blow-up check must stop
+// the undamped 0.9 run rather than let it run away.
+namespace {
+Real maxEnergyRatio(Real dampingRatio, Real s, long steps) {
+  Fabric f = straightChain(200, 1e-3, km2Material(dampingRatio, /*tensionOnly=*/true));
   randomVelocities(f, 42, 20.0, Vec3(1, 0, 0));
   FabricEngine eng(std::move(f));
-  const Real s = 0.9, dt = s * eng.criticalDt();
+  const Real dt = s * eng.criticalDt();
   const auto b0 = eng.dynamics().energy();
   const Real E0 = b0.kinetic + b0.elastic;
   Real maxE = 0;
-  EXPECT_NO_THROW({
-    for (int k = 0; k < 20000; ++k) {
-      eng.step(dt);
-      const auto b = eng.dynamics().energy();
-      maxE = std::max(maxE, b.kinetic + b.elastic);
-    }
-  });
-  EXPECT_LT(maxE, E0 / (1 - s * s)) << "max E/E0 = " << maxE / E0;
+  for (long k = 0; k < steps; ++k) {
+    eng.step(dt);
+    const auto b = eng.dynamics().energy();
+    maxE = std::max(maxE, b.kinetic + b.elastic);
+  }
+  return maxE / E0;
+}
+}  // namespace
+
+TEST(DynamicsStability, TensionOnlySlackSwitchingEnvelope) {
+  const long n = runLength(20000, 10);
+  EXPECT_LT(maxEnergyRatio(0.0, 0.5, n), 1.5);   // undamped at half the critical step
+  EXPECT_LT(maxEnergyRatio(0.05, 0.9, n), 1.5);  // a little damping at 0.9 dt_crit
+  EXPECT_THROW(maxEnergyRatio(0.0, 0.9, 20000), woven::InstabilityError);  // stopped, not run away
 }

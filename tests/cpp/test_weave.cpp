@@ -2,6 +2,7 @@
 // crossing clearance for every preset pattern and a random one, seamless replication, mass
 // bookkeeping, and the ParameterError raised for each kind of invalid input.
 #include "core/Errors.hpp"
+#include "geom/SegmentDistance.hpp"
 #include "weave/WeaveBuilder.hpp"
 #include <gtest/gtest.h>
 #include <algorithm>
@@ -62,6 +63,58 @@ Real minNodeDistance(const Fabric& f) {
   return best;
 }
 
+// Centre-line gap at every crossing, found from the node positions alone: the warp node lying at
+// x = (j + 1/2) weftSpacing and the weft node at y = (i + 1/2) warpSpacing; the yarn on top is the
+// warp where pattern(i, j) = 1. Returns the smallest gap and counts the crossings found.
+Real gapFromNodes(const Weave& w, const WeaveParams& P, long& crossings) {
+  const Fabric& f = w.fabric;
+  const int NW = static_cast<int>(w.warpYarns.size()), NF = static_cast<int>(w.weftYarns.size());
+  std::vector<Real> zWarp(NW * NF, NAN), zWeft(NW * NF, NAN);
+  auto crossingIndex = [](Real coord, Real spacing, int count) {
+    const Real u = coord / spacing - 0.5;
+    const long k = std::lround(u);
+    return (std::abs(u - k) < 1e-9 && k >= 0 && k < count) ? k : -1;
+  };
+  for (int i = 0; i < NW; ++i) {
+    const auto& y = f.yarns[w.warpYarns[i]];
+    for (Index q = 0; q < y.nNodes; ++q) {
+      const long j = crossingIndex(f.pos[y.firstNode + q].x(), P.weftSpacing, NF);
+      if (j >= 0) zWarp[i * NF + j] = f.pos[y.firstNode + q].z();
+    }
+  }
+  for (int j = 0; j < NF; ++j) {
+    const auto& y = f.yarns[w.weftYarns[j]];
+    for (Index q = 0; q < y.nNodes; ++q) {
+      const long i = crossingIndex(f.pos[y.firstNode + q].y(), P.warpSpacing, NW);
+      if (i >= 0) zWeft[i * NF + j] = f.pos[y.firstNode + q].z();
+    }
+  }
+  Real gap = INFINITY;
+  crossings = 0;
+  for (int i = 0; i < NW; ++i)
+    for (int j = 0; j < NF; ++j) {
+      const Real zw = zWarp[i * NF + j], zf = zWeft[i * NF + j];
+      if (std::isnan(zw) || std::isnan(zf)) continue;
+      ++crossings;
+      gap = std::min(gap, P.pattern.warpOver(i % P.pattern.rows(), j % P.pattern.cols()) ? zw - zf : zf - zw);
+    }
+  return gap;
+}
+
+// Smallest 3D distance between any warp CP and any weft CP of the fabric (brute force).
+Real minWarpWeftDistance(const Weave& w) {
+  const Fabric& f = w.fabric;
+  Real best = INFINITY;
+  for (Index yw : w.warpYarns)
+    for (Index yf : w.weftYarns) {
+      const auto &A = f.yarns[yw], &B = f.yarns[yf];
+      for (Index a = A.firstNode; a + 1 < A.firstNode + A.nNodes; ++a)
+        for (Index b = B.firstNode; b + 1 < B.firstNode + B.nNodes; ++b)
+          best = std::min(best, woven::closestSegmentSegment(f.pos[a], f.pos[a + 1], f.pos[b], f.pos[b + 1]).distance);
+    }
+  return best;
+}
+
 }  // namespace
 
 TEST(Weave, Km2ArealDensityAndCrimp) {
@@ -107,6 +160,16 @@ TEST(Weave, CrossingsClearForEveryPatternAndResolution) {
           const Real tw = std::tan(S.warpPeirce.theta), tf = std::tan(S.weftPeirce.theta);
           EXPECT_GE(S.minChainClearance, S.requiredGap / std::sqrt(1 + tw * tw + tf * tf) - 1e-12);
           EXPECT_LE(S.minChainClearance, S.minVerticalGap + 1e-15);  // the crossing nodes themselves
+          // Independently of the summary: the gap measured on the nodes at every crossing.
+          long crossings = 0;
+          const Real gap = gapFromNodes(w, P, crossings);
+          EXPECT_EQ(crossings, long(S.warpYarns) * S.weftYarns);
+          EXPECT_GE(gap, S.requiredGap - 1e-9);
+          EXPECT_NEAR(gap, S.minVerticalGap, 1e-15);
+          // One repeat: every warp CP against every weft CP, not only those near a crossing.
+          if (nx == 1 && ny == 1) {
+            EXPECT_GE(minWarpWeftDistance(w), S.requiredGap / std::sqrt(1 + tw * tw + tf * tf) - 1e-12);
+          }
         }
 }
 
