@@ -103,57 +103,52 @@ void ChainDynamics::refreshForces() {
   books_.work = w;
 }
 
-// Fused half-kicks and drift over all nodes (velocity Verlet, see the header). Returns the kinetic
-// energy of step n; momentumFree collects sum m v_{n+1/2} of free nodes for the body-force work.
-Real ChainDynamics::kickDrift(Real dt, Vec3& momentumFree) {
-  for (std::size_t k = 0; k < loads_.kinematicNodes.size(); ++k)
-    f_.vel[loads_.kinematicNodes[k]] = loads_.kinematicVelocity[k];
+// One pass over every chain: the axial spring + dashpot of each CP (paper Eq. 3),
+// T = K(l - l0) + c*ldot along n = (x1-x0)/l, +T*n on the first node and -T*n on the second;
+// tension-only yarns carry no force while slack and their dashpot never pushes (T = max(0, T)).
+// Chains are contiguous, so each node's force is assigned by the element before it and completed by
+// the element after it (no zeroing pass). With Drift, each node is first kicked and drifted
+// (velocity Verlet with fused half-kicks, see the header) just before the first CP that uses it, so
+// positions, velocities and forces stream through the cache once per step; the node's old force is
+// read before the CP overwrites it. ke and momentum collect sum m v_n^2 and sum m v_{n+1/2} of free
+// nodes (for the body-force work).
+template <bool Drift, bool Gravity>
+void ChainDynamics::sweep(Real dt, Real& ke, Vec3& momentum) {
   const Real hPrev = 0.5 * dtPrev_, h = 0.5 * dt;
   const Vec3 g = loads_.bodyAcceleration;
   Vec3* __restrict x = f_.pos.data();
   Vec3* __restrict v = f_.vel.data();
-  const Vec3* __restrict F = f_.force.data();
+  Vec3* __restrict F = f_.force.data();
   const Real* __restrict im = f_.invMass.data();
   const Real* __restrict m = f_.mass.data();
-  const Index n = f_.nNodes();
-  Real ke = 0;
+  const Real* __restrict l0 = f_.restLength.data();
+  const Real* __restrict K = f_.stiffness.data();
+  const Real* __restrict C = f_.damping.data();
+  Real* __restrict strain = f_.strain.data();
+  Real* __restrict tension = f_.tension.data();
+  Real ke2 = 0, elastic = 0, dissipated = 0;
   Vec3 p = Vec3::Zero();
-  for (Index i = 0; i < n; ++i) {
-    const Real free = im[i] > 0 ? 1.0 : 0.0;
-    const Vec3 a = F[i] * im[i] + free * g;
+  auto kickDrift = [&](Index i) {
+    Vec3 a = F[i] * im[i];  // kinematic nodes: invMass 0, their velocity was set before the sweep
+    if (Gravity) a += (im[i] > 0 ? 1.0 : 0.0) * g;
     const Vec3 vn = v[i] + hPrev * a;
-    ke += m[i] * vn.squaredNorm();
+    ke2 += m[i] * vn.squaredNorm();
     v[i] = vn + h * a;
-    p += (free * m[i]) * v[i];
+    if (Gravity) p += (im[i] > 0 ? m[i] : 0.0) * v[i];
     x[i] += dt * v[i];
-  }
-  momentumFree = p;
-  return 0.5 * ke;
-}
-
-// Axial spring + dashpot of every CP (paper Eq. 3): T = K(l - l0) + c*ldot along n = (x1-x0)/l,
-// +T*n on the first node, -T*n on the second. Tension-only yarns carry no force while slack and
-// their dashpot never pushes (T = max(0, T)). Chains are contiguous, so each node's force is
-// assigned by the element before it and completed by the element after it: no zeroing pass.
-void ChainDynamics::computeForces(Real dt) {
-  Vec3* __restrict F = f_.force.data();
-  const Vec3* __restrict x = f_.pos.data();
-  const Vec3* __restrict v = f_.vel.data();
-  Real elastic = 0, dissipated = 0, check = 0;
+  };
   for (const Yarn& y : f_.yarns) {
     const bool tensionOnly = f_.materials[y.material].tensionOnly;
     const Index e0 = y.firstElem, e1 = y.firstElem + y.nElems;
-    const Real* __restrict l0 = f_.restLength.data();
-    const Real* __restrict K = f_.stiffness.data();
-    const Real* __restrict C = f_.damping.data();
-    Real* __restrict strain = f_.strain.data();
-    Real* __restrict tension = f_.tension.data();
+    if (Drift) kickDrift(y.firstNode);
     F[y.firstNode].setZero();
     for (Index e = e0; e < e1; ++e) {
       const Index a = y.firstNode + (e - e0);
+      if (Drift) kickDrift(a + 1);
       const Vec3 d = x[a + 1] - x[a];
       const Real l = d.norm();
-      const Vec3 n = d / l;
+      const Real il = 1.0 / l;  // one division, not three
+      const Vec3 n = d * il;
       const Real ldot = n.dot(v[a + 1] - v[a]);
       const Real stretch = l - l0[e];
       Real Te = K[e] * stretch;
@@ -164,8 +159,7 @@ void ChainDynamics::computeForces(Real dt) {
         T = taut ? std::max(T, 0.0) : 0.0;
       }
       elastic += Te * stretch;  // = K*stretch^2 where the spring acts
-      dissipated += (T - Te) * ldot;
-      check += l;
+      dissipated += (T - Te) * ldot;  // a non-finite l reaches both sums, even through a clamp
       strain[e] = stretch / l0[e];
       tension[e] = T;
       const Vec3 Fa = T * n;
@@ -173,11 +167,20 @@ void ChainDynamics::computeForces(Real dt) {
       F[a + 1] = -Fa;
     }
   }
-  if (!std::isfinite(elastic + check + dissipated)) failNonFinite();
-  for (std::size_t k = 0; k < loads_.forceNodes.size(); ++k) F[loads_.forceNodes[k]] += loads_.forceValues[k];
+  ke = 0.5 * ke2;
+  momentum = p;
+  if (!std::isfinite(elastic + dissipated + ke)) failNonFinite();
+  books_.elastic = 0.5 * elastic;
+  books_.damped += dissipated * dt;  // dashpot power (T-Te)*ldot = c*ldot^2 >= 0 leaves the motion
+}
 
-  // Work of the loads over this step: point forces and body force on the drift just made, supports
-  // with the trapezoidal rule on their reactions (R = -f - m g at constant prescribed velocity).
+// Point forces, support reactions and the work of the loads over the step just made: point forces
+// and body force on the drift, supports by the trapezoidal rule on their reactions (R = -f - m g at
+// constant prescribed velocity).
+void ChainDynamics::finishLoads(Real dt) {
+  Vec3* F = f_.force.data();
+  const Vec3* v = f_.vel.data();
+  for (std::size_t k = 0; k < loads_.forceNodes.size(); ++k) F[loads_.forceNodes[k]] += loads_.forceValues[k];
   Real work = 0;
   const Vec3 g = loads_.bodyAcceleration;
   for (std::size_t k = 0; k < loads_.forceNodes.size(); ++k) {
@@ -190,20 +193,31 @@ void ChainDynamics::computeForces(Real dt) {
     work += 0.5 * (R + loads_.reaction[k]).dot(v[i]) * dt;
     loads_.reaction[k] = R;
   }
-  books_.elastic = 0.5 * elastic;
-  books_.damped += dissipated * dt;  // dashpot power (T-Te)*ldot = c*ldot^2 >= 0 leaves the motion
   books_.work += work;
 }
 
-void ChainDynamics::step(Real dt) {
-  require(std::isfinite(dt) && dt > 0, "dt", dt, "(0, dt_crit] s");
-  if (!started_) start();
+void ChainDynamics::computeForces(Real dt) {
+  Real ke;
   Vec3 p;
-  const Real ke = kickDrift(dt, p);
-  if (!std::isfinite(ke)) failNonFinite();
+  sweep<false, false>(dt, ke, p);
+  finishLoads(dt);
+}
+
+void ChainDynamics::step(Real dt) {
+  if (!(std::isfinite(dt) && dt > 0)) throw ParameterError("dt", fmt(dt), "(0, dt_crit] s");
+  if (!started_) start();
+  for (std::size_t k = 0; k < loads_.kinematicNodes.size(); ++k)
+    f_.vel[loads_.kinematicNodes[k]] = loads_.kinematicVelocity[k];
+  Real ke;
+  Vec3 p;
+  if (loads_.bodyAcceleration.squaredNorm() > 0) {
+    sweep<true, true>(dt, ke, p);
+    books_.work += loads_.bodyAcceleration.dot(p) * dt;
+  } else {
+    sweep<true, false>(dt, ke, p);
+  }
   books_.kinetic = ke;
-  books_.work += loads_.bodyAcceleration.dot(p) * dt;
-  computeForces(dt);
+  finishLoads(dt);
   ++step_;
   time_ += dt;
   dtPrev_ = dt;

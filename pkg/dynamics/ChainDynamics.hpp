@@ -1,6 +1,6 @@
 // Yarn-chain dynamics: axial springs with dashpots (paper Eq. 3), loads, and the explicit
-// velocity-Verlet integrator, with the two half-kicks of consecutive steps fused into one pass
-// (leapfrog) so each step streams the node arrays once and the element arrays once.
+// velocity-Verlet integrator, with the two half-kicks of consecutive steps fused and the node update
+// fused into the CP force pass, so each step streams the node and element arrays once.
 //
 // One step (n -> n+1), state x_n, v_{n-1/2}, f_n:
 //   nodes:    v_n = v_{n-1/2} + dt_prev/2 a_n          (kinetic energy of step n)
@@ -71,8 +71,10 @@ class ChainDynamics {
   void restoreLastGood();
 
  private:
-  Real kickDrift(Real dt, Vec3& momentumFree);
-  void computeForces(Real dt);
+  template <bool Drift, bool Gravity>
+  void sweep(Real dt, Real& ke, Vec3& momentum);
+  void finishLoads(Real dt);
+  void computeForces(Real dt);  // sweep without drift + loads: forces at the current state
   void start();
   void checkpoint();
   Vec3 acceleration(Index i) const;

@@ -13,8 +13,8 @@ void FabricEngine::invalidate() { dtCrit_ = criticalTimeStep(*fabric_); }
 
 void FabricEngine::step(Real dt) {
   // Refused before anything moves: a step above the central-difference limit grows without bound.
-  require(std::isfinite(dt) && dt > 0 && dt <= dtCrit_ * (1 + 1e-12), "dt", dt,
-          "(0, dt_crit = " + fmt(dtCrit_) + "] s (stable limit of the chain; set O.dt below it)");
+  if (!(std::isfinite(dt) && dt > 0 && dt <= dtCrit_ * (1 + 1e-12)))  // message built only on failure
+    throw ParameterError("dt", fmt(dt), "(0, dt_crit = " + fmt(dtCrit_) + "] s (stable limit of the chain; set O.dt below it)");
   dynamics_.step(dt);
 }
 

@@ -64,9 +64,9 @@ def test_default_time_stepper_is_refused(yade_ns):
 
 
 def test_instability_stops_with_step_node_cause_and_keeps_last_good_state(yade_ns, tmp_path):
-    """An energy budget of 1 + 1e-9 times (initial + work) is broken by the integrator's own O(dt^2)
-    energy oscillation within a few steps: the run must stop, name step, node and cause, and keep
-    the last check point."""
+    """An energy budget of a quarter of (initial + work) is broken at the first step (the check's
+    trigger, not the physics, is what is artificial here): the run must stop, name step, node and
+    cause, and keep the last check point."""
     import struct
     import woven
     O = yade_ns.O
@@ -79,7 +79,7 @@ def test_instability_stops_with_step_node_cause_and_keeps_last_good_state(yade_n
     e.fix(50)
     for i in range(1, 50):
         e.set_vel(i, yade_ns.Vector3(0.3 * math.sin(math.pi * i / 50), math.sin(math.pi * i / 50), 0))
-    e.blowup_factor = 1 + 1e-9
+    e.blowup_factor = 0.25
     with pytest.raises(RuntimeError, match='unstable at step'):
         O.run(500, True)
     err = woven.engine.last_error
