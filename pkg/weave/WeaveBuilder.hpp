@@ -7,10 +7,12 @@
 // +h/2, the other at -h/2 (its own crimp height h), so the centre-line gap is (h_warp + h_weft)/2,
 // which Peirce's touching condition makes (t_warp + t_weft)/2.
 //
-// Centre line (Figure 2b/2c): Peirce's shape (arcs of radius D/2 about the crossing yarn, straight
-// segments at the weave angle), flat along floats, sampled by CP nodes equally spaced in projection
-// with a node on every crossing (the "extra nodes" of the paper's B-spline smoothing are the
-// cpPerSpan - 1 nodes between crossings). The node on a crossing sits exactly at +-h/2, so the
+// Centre line (Figure 2b/2c): the zigzag through the crossings is smoothed into Peirce's shape
+// (arcs of radius D/2 about the crossing yarn, straight segments at the weave angle; flat along
+// floats). Arcs and lines joined with common tangents are exactly a C1 rational quadratic B-spline,
+// so this is the paper's B-spline smoothing with its control polygon fixed by Peirce's geometry
+// rather than by a free smoothing parameter. It is sampled by CP nodes equally spaced in projection
+// with a node on every crossing (the cpPerSpan - 1 "extra nodes" between crossings). The node on a crossing sits exactly at +-h/2, so the
 // centre-line gap there is exactly (t_warp + t_weft)/2; the straight CPs next to it cut inside the
 // arc, so the 3D distance of the two node chains is slightly smaller (reported as
 // minChainClearance; it tends to the gap as cpPerSpan grows).
