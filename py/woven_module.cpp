@@ -5,6 +5,7 @@
 #include <boost/python/stl_iterator.hpp>
 #include "core/Errors.hpp"
 #include "engine/FabricEngine.hpp"
+#include "geom/SeparatingAxis.hpp"
 #include "weave/WeaveBuilder.hpp"
 #include <memory>
 
@@ -145,6 +146,37 @@ void setCheckpointInterval(FabricEngine& e, long k) {
 }
 bool isKinematic(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.dynamics().isKinematic(i); }
 
+OBB makeObb(const Vec3& c, const Mat3& axes, const Vec3& e) {
+  require(c.allFinite() && axes.allFinite(), "centre/axes", 0, "finite values");
+  require((axes.transpose() * axes - Mat3::Identity()).cwiseAbs().maxCoeff() < 1e-9 && axes.determinant() > 0, "axes",
+          axes.determinant(), "a rotation matrix (orthonormal columns A0, A1, A2, right-handed)");
+  require(e.allFinite() && e.minCoeff() >= 0, "extents", e.minCoeff(), "[0, inf) m (half-extents)");
+  OBB b;
+  b.centre = c, b.axes = axes, b.extent = e;
+  return b;
+}
+bp::dict contactDict(const BoxContact& c) {
+  bp::dict d;
+  d["overlap"] = c.overlap, d["normal"] = c.normal, d["depth"] = c.depth, d["axis"] = c.axis;
+  bp::list pts;
+  for (int i = 0; i < c.nPoints; ++i)
+    pts.append(bp::make_tuple(c.points[i].onA, c.points[i].onB, c.points[i].depth));
+  d["points"] = pts;
+  return d;
+}
+bp::dict obbContactPy(const Vec3& ca, const Mat3& Aa, const Vec3& ea, const Vec3& cb, const Mat3& Ab, const Vec3& eb) {
+  return contactDict(obbContact(makeObb(ca, Aa, ea), makeObb(cb, Ab, eb)));
+}
+bp::dict obbFirstContactPy(const Vec3& ca, const Mat3& Aa, const Vec3& ea, const Vec3& va, const Vec3& cb,
+                           const Mat3& Ab, const Vec3& eb, const Vec3& vb, Real dt) {
+  require(std::isfinite(dt) && dt >= 0, "dt", dt, "[0, inf) s");
+  require(va.allFinite() && vb.allFinite(), "velocity", 0, "finite [m/s]");
+  const SweptContact s = obbFirstContact(makeObb(ca, Aa, ea), va, makeObb(cb, Ab, eb), vb, dt);
+  bp::dict d;
+  d["hit"] = s.hit, d["time"] = s.time, d["contact"] = contactDict(s.contact);
+  return d;
+}
+
 }  // namespace
 
 BOOST_PYTHON_MODULE(_woven) {
@@ -188,6 +220,18 @@ BOOST_PYTHON_MODULE(_woven) {
           "Peirce geometry from spacing p [m], crimp height h [m] and D = d1 + d2 [m].");
   bp::def("peirce_from_crimp", &peirceFromCrimp, (bp::arg("p"), bp::arg("crimp"), bp::arg("D")),
           "Peirce geometry from spacing p [m], crimp [-] and D = d1 + d2 [m].");
+
+  bp::def("obb_contact", &obbContactPy,
+          (bp::arg("centre_a"), bp::arg("axes_a"), bp::arg("extents_a"), bp::arg("centre_b"), bp::arg("axes_b"),
+           bp::arg("extents_b")),
+          "Separating-axis test of two oriented boxes (centre [m], Matrix3 whose columns are the axes, "
+          "half-extents [m]): dict overlap, normal (A to B), depth [m] (exact 15-axis minimum), axis "
+          "(0-2 face of A, 3-5 face of B, 6+3i+j edge A_i x B_j), points [(on A, on B, depth)].");
+  bp::def("obb_first_contact", &obbFirstContactPy,
+          (bp::arg("centre_a"), bp::arg("axes_a"), bp::arg("extents_a"), bp::arg("velocity_a"), bp::arg("centre_b"),
+           bp::arg("axes_b"), bp::arg("extents_b"), bp::arg("velocity_b"), bp::arg("dt")),
+          "Moving separating-axis test over [0, dt] s with constant velocities [m/s]: dict hit, time [s] "
+          "(first contact), contact (as obb_contact, at that time).");
 
   bp::class_<WeaveParams>("WeaveParams", "Weave builder parameters (SI); see woven.weave for the keys.")
       .def_readwrite("pattern", &WeaveParams::pattern)
