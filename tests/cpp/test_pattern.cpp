@@ -2,6 +2,7 @@
 // the ParameterError raised for each kind of invalid input. Integer matrices: all checks are exact.
 #include "core/Errors.hpp"
 #include "weave/Pattern.hpp"
+#include "chain_util.hpp"
 #include <gtest/gtest.h>
 #include <functional>
 #include <numeric>
@@ -10,6 +11,8 @@
 using woven::ParameterError;
 using woven::Pattern;
 using Matrix = std::vector<std::vector<int>>;
+
+using woven_test::parameterOf;
 
 namespace {
 
@@ -22,16 +25,6 @@ int colSum(const Pattern& p, int j) {
   int s = 0;
   for (int i = 0; i < p.rows(); ++i) s += p.warpOver(i, j) ? 1 : 0;
   return s;
-}
-
-// Runs f, expects a ParameterError and returns its parameter() ("" if none was thrown).
-std::string parameterOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const ParameterError& e) {
-    return e.parameter();
-  }
-  return "";
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // unreachable input with ParameterError.
 #include "core/Errors.hpp"
 #include "weave/Peirce.hpp"
+#include "chain_util.hpp"
 #include <gtest/gtest.h>
 #include <cmath>
 #include <functional>
@@ -11,6 +12,9 @@
 using woven::PeirceState;
 using woven::Real;
 
+using woven_test::parameterOf;
+using woven_test::rel;
+
 namespace {
 
 // Peirce's relations evaluated independently of the solver.
@@ -18,16 +22,7 @@ Real peirceP(const PeirceState& s) { return (s.l - s.D * s.theta) * std::cos(s.t
 Real peirceH(const PeirceState& s) {
   return (s.l - s.D * s.theta) * std::sin(s.theta) + s.D * (1 - std::cos(s.theta));
 }
-Real rel(Real a, Real b) { return std::abs(a - b) / std::abs(b); }
 
-std::string parameterOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const woven::ParameterError& e) {
-    return e.parameter();
-  }
-  return "";
-}
 
 const Real kP = 25.4e-3 / 34;  // KM2 spacing [m]
 const Real kD = 0.22e-3;       // two 0.11 mm yarns [m]

@@ -4,6 +4,7 @@
 #include "core/Errors.hpp"
 #include "geom/SegmentDistance.hpp"
 #include "weave/WeaveBuilder.hpp"
+#include "chain_util.hpp"
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <cmath>
@@ -19,18 +20,12 @@ using woven::Vec3;
 using woven::Weave;
 using woven::WeaveParams;
 
+using woven_test::parameterOf;
+using woven_test::rel;
+
 namespace {
 
-Real rel(Real a, Real b) { return std::abs(a - b) / std::abs(b); }
 
-std::string parameterOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const woven::ParameterError& e) {
-    return e.parameter();
-  }
-  return "";
-}
 
 // A random 0/1 matrix that is a valid pattern (seeded; invalid draws are rejected).
 Pattern randomPattern(std::mt19937& rng) {
