@@ -1,6 +1,6 @@
 // Yarn-chain dynamics: axial springs with dashpots (paper Eq. 3), loads, and the explicit
-// velocity-Verlet integrator, with the two half-kicks of consecutive steps fused and the node update
-// fused into the CP force pass, so each step streams the node and element arrays once.
+// velocity-Verlet integrator, with the two half-kicks of consecutive steps fused (leapfrog), so each
+// step is one pass over the nodes and one over the CPs.
 //
 // One step (n -> n+1), state x_n, v_{n-1/2}, f_n:
 //   nodes:    v_n = v_{n-1/2} + dt_prev/2 a_n          (kinetic energy of step n)
@@ -51,7 +51,9 @@ class ChainDynamics {
   /// throws InstabilityError on a non-finite state or an energy blow-up, before the bad values
   /// reach the state where it can, and keeps the last good state in any case.
   void step(Real dt);
-  /// Recomputes forces at the current state (call after moving nodes by hand).
+  /// Recomputes forces at the current state, and the CPs' strain and tension (Fabric::strain,
+  /// Fabric::tension), which step() leaves as they were: call it before reading them, and after
+  /// moving nodes by hand.
   void refreshForces();
 
   /// Energy books at the current state (computes the synchronised kinetic energy: O(nodes)).
@@ -71,10 +73,12 @@ class ChainDynamics {
   void restoreLastGood();
 
  private:
-  template <bool Drift, bool Gravity>
-  void sweep(Real dt, Real& ke, Vec3& momentum);
+  template <bool Gravity>
+  Real kickDrift(Real dt, Vec3& momentum);
+  template <bool StoreElementState>
+  void springForces(Real dt);
   void finishLoads(Real dt);
-  void computeForces(Real dt);  // sweep without drift + loads: forces at the current state
+  void computeForces(Real dt);  // springForces + finishLoads: forces at the current state
   void start();
   void checkpoint();
   Vec3 acceleration(Index i) const;

@@ -36,8 +36,8 @@ struct Fabric {
   std::vector<Real> restLength;  ///< l0 [m]
   std::vector<Real> stiffness;   ///< K = E*A/l0 [N/m]
   std::vector<Real> damping;     ///< c [N*s/m]
-  std::vector<Real> strain;      ///< (l - l0)/l0 at the current positions [-]
-  std::vector<Real> tension;     ///< axial force, positive in tension [N]
+  std::vector<Real> strain;      ///< (l - l0)/l0 [-], as of the last ChainDynamics::refreshForces()
+  std::vector<Real> tension;     ///< axial force, positive in tension [N], as strain
   std::vector<std::uint8_t> alive;
   std::vector<Index> elemYarn;
 
