@@ -151,8 +151,11 @@ if rows:
     if status == 'ok' and not all(ch['passed'] for ch in checks.values()):
         status = 'failed'
 
-reference = {'strain': th['strain'], 'U_E': th['U_E'], 'U_L': th['U_L'], 'w': th['w'], 'c': c}
-units = {'strain': '-', 'U_E': 'm/s', 'U_L': 'm/s', 'w': 'm/s', 'c': 'm/s', 'l0': 'm', 'elements': '-'}
+reference = {'strain': th['strain'], 'U_E': th['U_E'], 'U_L': th['U_L'], 'w': th['w'], 'c': c,
+             # impact speed that strains the yarn to 5 % at once (Smith): the scene's V must stay below
+             'critical_velocity_5pct': woven.theory.smith_critical_velocity(0.05, p.E, p.rho)}
+units = {'strain': '-', 'U_E': 'm/s', 'U_L': 'm/s', 'w': 'm/s', 'c': 'm/s', 'l0': 'm', 'elements': '-',
+         'critical_velocity_5pct': 'm/s'}
 write_summary(d, 'smith', p, measured, reference, units, status, checks)
 print('smith: %s -> %s' % (status, d))
 if status != 'ok':

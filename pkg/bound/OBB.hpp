@@ -18,8 +18,6 @@ struct OBB {
   Vec3 vertex(int s0, int s1, int s2) const {
     return centre + axes * Vec3(s0 * extent[0], s1 * extent[1], s2 * extent[2]);
   }
-  /// Half-width of the box's projection on a unit direction n.
-  Real radius(const Vec3& n) const { return (axes.transpose() * n).cwiseAbs().dot(extent); }
   /// Signed distance-like test: max over axes of |local coordinate| - extent (<= 0 inside).
   Real outside(const Vec3& p) const { return ((axes.transpose() * (p - centre)).cwiseAbs() - extent).maxCoeff(); }
 };

@@ -13,8 +13,6 @@ void YarnMaterial::validate(const std::string& p) const {
   require(std::isfinite(failureStrain) && failureStrain > 0, p + "failure_strain", failureStrain, "(0, inf)");
 }
 
-Real YarnMaterial::waveSpeed() const { return std::sqrt(E / rho); }
-
 void YarnSection::validate(const std::string& p) const {
   require(std::isfinite(width) && width > 0, p + "width", width, "(0, inf) m");
   require(std::isfinite(thickness) && thickness > 0, p + "thickness", thickness, "(0, inf) m");

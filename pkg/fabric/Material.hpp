@@ -16,7 +16,6 @@ struct YarnMaterial {
 
   /// Throws ParameterError naming the bad field and its range.
   void validate(const std::string& prefix = "") const;
-  Real waveSpeed() const;      ///< c = sqrt(E/rho) [m/s]
 };
 
 /// Elliptic yarn cross-section at rest: width (in the fabric plane) and thickness (normal to it).
