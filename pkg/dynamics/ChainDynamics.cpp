@@ -16,7 +16,7 @@ Real criticalTimeStep(const Fabric& f) {
   return dt;
 }
 
-ChainDynamics::ChainDynamics(Fabric& fabric) : f_(fabric) {}
+ChainDynamics::ChainDynamics(Fabric& fabric) : f_(fabric), dtCrit_(criticalTimeStep(fabric)) {}
 
 void ChainDynamics::prescribeVelocity(Index i, const Vec3& v) {
   f_.checkNode(i);
@@ -82,7 +82,6 @@ Vec3 ChainDynamics::reaction(const std::vector<Index>& nodes) const {
 }
 
 void ChainDynamics::start() {
-  dtCrit_ = criticalTimeStep(f_);
   computeForces(0.0);
   books_.damped = 0;
   books_.work = 0;
@@ -96,11 +95,7 @@ void ChainDynamics::start() {
 
 void ChainDynamics::refreshForces() {
   if (!started_) return start();
-  dtCrit_ = criticalTimeStep(f_);
-  const Real d = books_.damped, w = books_.work;
-  computeForces(0.0);
-  books_.damped = d;
-  books_.work = w;
+  computeForces(0.0);  // dt = 0: the damped and work books take nothing
 }
 
 // Kick and drift of every node (velocity Verlet with the two half-kicks of consecutive steps fused,
@@ -289,10 +284,7 @@ void ChainDynamics::restoreLastGood() {
   f_.vel = goodVel_;
   step_ = goodStep_;
   time_ = goodTime_;
-  const Real d = books_.damped, w = books_.work;
-  computeForces(0.0);
-  books_.damped = d;
-  books_.work = w;
+  refreshForces();
 }
 
 }  // namespace woven

@@ -59,6 +59,8 @@ class ChainDynamics {
   /// Energy books at the current state (computes the synchronised kinetic energy: O(nodes)).
   EnergyBooks energy() const;
   long stepCount() const { return step_; }
+  /// Critical time step [s] of the fabric (criticalTimeStep), computed at construction.
+  Real criticalDt() const { return dtCrit_; }
   Real time() const { return time_; }  ///< [s]
   /// Velocity of node i at the current integer step, v_n = v_{n-1/2} + dt/2 a_n [m/s].
   Vec3 syncVelocity(Index i) const;
@@ -90,7 +92,7 @@ class ChainDynamics {
   long step_ = 0;
   Real time_ = 0;
   Real dtPrev_ = 0;
-  Real dtCrit_ = 0;     // criticalTimeStep of the fabric, for the blow-up budget (start, refreshForces)
+  Real dtCrit_ = 0;     // criticalTimeStep of the fabric: the engine's dt limit and the blow-up budget
   Vec3Array goodPos_, goodVel_;
   long goodStep_ = 0;
   Real goodTime_ = 0;

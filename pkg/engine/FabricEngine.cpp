@@ -5,16 +5,13 @@
 namespace woven {
 
 FabricEngine::FabricEngine(Fabric fabric)
-    : fabric_(std::make_unique<Fabric>(std::move(fabric))), dynamics_(*fabric_) {
-  invalidate();
-}
-
-void FabricEngine::invalidate() { dtCrit_ = criticalTimeStep(*fabric_); }
+    : fabric_(std::make_unique<Fabric>(std::move(fabric))), dynamics_(*fabric_) {}
 
 void FabricEngine::step(Real dt) {
+  const Real dtCrit = dynamics_.criticalDt();
   // Refused before anything moves: a step above the central-difference limit grows without bound.
-  if (!(std::isfinite(dt) && dt > 0 && dt <= dtCrit_ * (1 + 1e-12)))  // message built only on failure
-    throw ParameterError("dt", fmt(dt), "(0, dt_crit = " + fmt(dtCrit_) + "] s (stable limit of the chain; set O.dt below it)");
+  if (!(std::isfinite(dt) && dt > 0 && dt <= dtCrit * (1 + 1e-12)))  // message built only on failure
+    throw ParameterError("dt", fmt(dt), "(0, dt_crit = " + fmt(dtCrit) + "] s (stable limit of the chain; set O.dt below it)");
   dynamics_.step(dt);
 }
 

@@ -21,12 +21,10 @@ class FabricEngine {
   ChainDynamics& dynamics() { return dynamics_; }
   const ChainDynamics& dynamics() const { return dynamics_; }
 
-  /// Critical time step of the chain [s] (see criticalTimeStep); cached.
-  Real criticalDt() const { return dtCrit_; }
+  /// Critical time step of the chain [s] (see criticalTimeStep).
+  Real criticalDt() const { return dynamics_.criticalDt(); }
   /// Advances one step of dt [s]. Refuses (ParameterError "dt") any dt outside (0, dt_crit].
   void step(Real dt);
-  /// Recomputes cached quantities after material or mass changes.
-  void invalidate();
 
   KinematicState state() const;
   KinematicState lastGoodState() const;
@@ -36,7 +34,6 @@ class FabricEngine {
  private:
   std::unique_ptr<Fabric> fabric_;  // heap-held so the dynamics' reference stays valid
   ChainDynamics dynamics_;
-  Real dtCrit_ = 0;
 };
 
 }  // namespace woven
