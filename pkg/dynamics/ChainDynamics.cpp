@@ -85,6 +85,8 @@ void ChainDynamics::start() {
   computeForces(0.0);
   books_.damped = 0;
   books_.work = 0;
+  books_.contact = 0;
+  books_.contactInput = 0;
   Real ke = 0;
   for (Index i = 0; i < f_.nNodes(); ++i) ke += 0.5 * f_.mass[i] * f_.vel[i].squaredNorm();
   books_.kinetic = ke;
@@ -103,7 +105,7 @@ void ChainDynamics::refreshForces() {
 // kinetic energy of step n; momentum collects sum m v_{n+1/2} of free nodes for the body-force work.
 // (A separate pass: fusing it into the CP loop below was measured slower, 39 vs 62 M node-steps/s
 // in cache, because each CP then waits on the drift of its second node.)
-template <bool Gravity>
+template <bool Gravity, bool Drift>
 Real ChainDynamics::kickDrift(Real dt, Vec3& momentum) {
   const Real hPrev = 0.5 * dtPrev_, h = 0.5 * dt;
   const Vec3 g = loads_.bodyAcceleration;
@@ -121,11 +123,28 @@ Real ChainDynamics::kickDrift(Real dt, Vec3& momentum) {
     const Vec3 vn = v[i] + hPrev * a;
     ke2 += m[i] * vn.squaredNorm();
     v[i] = vn + h * a;
+    if (Drift) {
+      if (Gravity) p += (im[i] > 0 ? m[i] : 0.0) * v[i];
+      x[i] += dt * v[i];
+    }
+  }
+  momentum = p;
+  return 0.5 * ke2;
+}
+
+// The drift alone, after a StepHook changed the velocities.
+template <bool Gravity>
+void ChainDynamics::drift(Real dt, Vec3& momentum) {
+  Vec3* __restrict x = f_.pos.data();
+  const Vec3* __restrict v = f_.vel.data();
+  const Real* __restrict im = f_.invMass.data();
+  const Real* __restrict m = f_.mass.data();
+  Vec3 p = Vec3::Zero();
+  for (Index i = 0, n = f_.nNodes(); i < n; ++i) {
     if (Gravity) p += (im[i] > 0 ? m[i] : 0.0) * v[i];
     x[i] += dt * v[i];
   }
   momentum = p;
-  return 0.5 * ke2;
 }
 
 // The axial spring + dashpot of every CP (paper Eq. 3): T = K(l - l0) + c*ldot along
@@ -204,14 +223,22 @@ void ChainDynamics::computeForces(Real dt) {
   finishLoads(dt);
 }
 
-void ChainDynamics::step(Real dt) {
+void ChainDynamics::step(Real dt, StepHook* hook) {
   if (!(std::isfinite(dt) && dt > 0)) throw ParameterError("dt", fmt(dt), "(0, dt_crit] s");
   if (!started_) start();
   for (std::size_t k = 0; k < loads_.kinematicNodes.size(); ++k)
     f_.vel[loads_.kinematicNodes[k]] = loads_.kinematicVelocity[k];
   Vec3 p;
   const bool gravity = loads_.bodyAcceleration.squaredNorm() > 0;
-  const Real ke = gravity ? kickDrift<true>(dt, p) : kickDrift<false>(dt, p);
+  Real ke;
+  if (!hook) {
+    ke = gravity ? kickDrift<true, true>(dt, p) : kickDrift<false, true>(dt, p);
+  } else {
+    ke = gravity ? kickDrift<true, false>(dt, p) : kickDrift<false, false>(dt, p);
+    if (std::isfinite(ke)) bookContact(hook->beforeDrift(f_, dt));
+    gravity ? drift<true>(dt, p) : drift<false>(dt, p);
+    if (std::isfinite(ke)) bookContact(hook->afterDrift(f_, dt));
+  }
   if (!std::isfinite(ke)) failNonFinite();
   books_.kinetic = ke;
   if (gravity) books_.work += loads_.bodyAcceleration.dot(p) * dt;
@@ -225,8 +252,9 @@ void ChainDynamics::step(Real dt) {
   const Real s = dt / dtCrit_;
   const Real stableRange = s < 1 ? 1 / (1 - s * s) : 1.0;
   const Real budget =
-      limits.blowupFactor * stableRange * (books_.initial + std::abs(books_.work)) + limits.energyFloor;
-  if (books_.kinetic + books_.elastic + books_.damped > budget) {
+      limits.blowupFactor * stableRange * (books_.initial + std::abs(books_.work) + books_.contactInput) +
+      limits.energyFloor;
+  if (books_.total() > budget) {
     Index worst = 0;
     Real worstKe = -1;
     for (Index i = 0; i < f_.nNodes(); ++i) {
@@ -234,12 +262,17 @@ void ChainDynamics::step(Real dt) {
       if (k > worstKe) worstKe = k, worst = i;
     }
     throw InstabilityError(step_, worst, -1,
-                           "energy blow-up: kinetic+elastic+damped = " +
-                               fmt(books_.kinetic + books_.elastic + books_.damped) + " J exceeds " +
-                               fmt(limits.blowupFactor) + " x (initial + work) / (1 - (dt/dt_crit)^2) = " + fmt(budget) +
+                           "energy blow-up: kinetic+elastic+damped+contact = " +
+                               fmt(books_.total()) + " J exceeds " +
+                               fmt(limits.blowupFactor) + " x (initial + |work| + contact input) / (1 - (dt/dt_crit)^2) = " + fmt(budget) +
                                " J (time step too large, or a load out of bounds)");
   }
   if (limits.checkpointInterval > 0 && step_ % limits.checkpointInterval == 0) checkpoint();
+}
+
+void ChainDynamics::bookContact(Real added) {
+  books_.contact -= added;
+  books_.contactInput += std::max(Real(0), added);
 }
 
 void ChainDynamics::failNonFinite() {
@@ -274,16 +307,29 @@ EnergyBooks ChainDynamics::energy() const {
 void ChainDynamics::checkpoint() {
   goodPos_ = f_.pos;
   goodVel_ = f_.vel;
+  goodFlat_ = f_.secFlat;
+  goodDir_ = f_.secDir;
   goodStep_ = step_;
   goodTime_ = time_;
+  goodDtPrev_ = dtPrev_;
+}
+
+void ChainDynamics::setClock(long step, Real time, Real lastDt) {
+  require(step >= 0, "step", step, "[0, inf)");
+  require(std::isfinite(time), "time", time, "finite [s]");
+  require(std::isfinite(lastDt) && lastDt >= 0, "last_dt", lastDt, "[0, inf) s");
+  step_ = step, time_ = time, dtPrev_ = lastDt;
 }
 
 void ChainDynamics::restoreLastGood() {
   if (goodPos_.size() != f_.pos.size()) return;
   f_.pos = goodPos_;
   f_.vel = goodVel_;
+  f_.secFlat = goodFlat_;
+  f_.secDir = goodDir_;
   step_ = goodStep_;
   time_ = goodTime_;
+  dtPrev_ = goodDtPrev_;
   refreshForces();
 }
 

@@ -20,12 +20,23 @@ namespace woven {
 Real criticalTimeStep(const Fabric& f);
 
 struct InstabilityLimits {
-  /// Stop if kinetic+elastic+damped > factor*(initial+|work|)/(1-(dt/dt_crit)^2) + floor (the
+  /// Stop if kinetic+elastic+damped+contact > factor*(initial+|work|+contact input)/(1-(dt/dt_crit)^2) + floor (the
   /// 1/(1-(dt/dt_crit)^2) is how far a stable step lets the energy of a linear chain oscillate above
   /// the scheme's invariant; it is 1 for dt >= dt_crit).
   Real blowupFactor = 3.0;
   Real energyFloor = 1e-300;      ///< [J]
   long checkpointInterval = 100;  ///< steps between copies of the last good state
+};
+
+/// What runs between the kick and the drift of a step (the collision stage): it sees x_n and the
+/// velocities v_{n+1/2} that the drift will use, may change both, and returns the kinetic energy it
+/// added [J] (negative when impulses dissipate).
+class StepHook {
+ public:
+  virtual ~StepHook() = default;
+  virtual Real beforeDrift(Fabric& f, Real dt) = 0;
+  /// After the drift, on x_{n+1} and v_{n+1/2}, before the forces; returns the kinetic energy added [J].
+  virtual Real afterDrift(Fabric& f, Real dt) { return 0; }
 };
 
 class ChainDynamics {
@@ -50,7 +61,8 @@ class ChainDynamics {
   /// Advances one step of dt [s] > 0. Does not compare dt with the critical step (the engine does);
   /// throws InstabilityError on a non-finite state or an energy blow-up, before the bad values
   /// reach the state where it can, and keeps the last good state in any case.
-  void step(Real dt);
+  /// With a hook, the kick and the drift run as two passes with hook->beforeDrift between them.
+  void step(Real dt, StepHook* hook = nullptr);
   /// Recomputes forces at the current state, and the CPs' strain and tension (Fabric::strain,
   /// Fabric::tension), which step() leaves as they were: call it before reading them, and after
   /// moving nodes by hand.
@@ -62,6 +74,11 @@ class ChainDynamics {
   /// Critical time step [s] of the fabric (criticalTimeStep), computed at construction.
   Real criticalDt() const { return dtCrit_; }
   Real time() const { return time_; }  ///< [s]
+  /// dt of the last step [s] (0 before the first): the half-kick the next step owes the velocities.
+  Real lastDt() const { return dtPrev_; }
+  /// Sets the clock (step count, time [s], last dt [s]) of a loaded state, so the run continues
+  /// exactly as the saved one would have.
+  void setClock(long step, Real time, Real lastDt);
   /// Velocity of node i at the current integer step, v_n = v_{n-1/2} + dt/2 a_n [m/s].
   Vec3 syncVelocity(Index i) const;
   /// Total reaction force [N] of the supports on the kinematic nodes in `nodes`.
@@ -69,14 +86,19 @@ class ChainDynamics {
 
   const Vec3Array& lastGoodPos() const { return goodPos_; }
   const Vec3Array& lastGoodVel() const { return goodVel_; }
+  const std::vector<Real>& lastGoodFlat() const { return goodFlat_; }
+  const Vec3Array& lastGoodDir() const { return goodDir_; }
   long lastGoodStep() const { return goodStep_; }
+  Real lastGoodDt() const { return goodDtPrev_; }
   Real lastGoodTime() const { return goodTime_; }
-  /// Puts the last good state back into the fabric (positions, velocities, step, time).
+  /// Puts the last good state back into the fabric (positions, velocities, sections, step, time).
   void restoreLastGood();
 
  private:
-  template <bool Gravity>
+  template <bool Gravity, bool Drift>
   Real kickDrift(Real dt, Vec3& momentum);
+  template <bool Gravity>
+  void drift(Real dt, Vec3& momentum);
   template <bool StoreElementState>
   void springForces(Real dt);
   void finishLoads(Real dt);
@@ -85,6 +107,7 @@ class ChainDynamics {
   void checkpoint();
   Vec3 acceleration(Index i) const;
   [[noreturn]] void failNonFinite();
+  void bookContact(Real added);  // energy a StepHook added [J]
 
   Fabric& f_;
   Loads loads_;
@@ -93,9 +116,10 @@ class ChainDynamics {
   Real time_ = 0;
   Real dtPrev_ = 0;
   Real dtCrit_ = 0;     // criticalTimeStep of the fabric: the engine's dt limit and the blow-up budget
-  Vec3Array goodPos_, goodVel_;
+  Vec3Array goodPos_, goodVel_, goodDir_;
+  std::vector<Real> goodFlat_;
   long goodStep_ = 0;
-  Real goodTime_ = 0;
+  Real goodTime_ = 0, goodDtPrev_ = 0;
   bool started_ = false;
 };
 

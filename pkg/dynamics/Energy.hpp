@@ -1,6 +1,7 @@
 // Energy books of the chain dynamics. All in joules. "work" is what the loads (kinematic nodes,
-// point forces, body force) put in; the balance kinetic + elastic + damped = initial + work holds to
-// the integrator's O(dt^2) accuracy.
+// point forces, body force) put in; the balance kinetic + elastic + damped + contact = initial + work
+// holds to the integrator's O(dt^2) accuracy (plus the positional corrections of residual overlaps,
+// which no book takes: docs/collisions.md).
 #pragma once
 #include "core/Types.hpp"
 
@@ -11,10 +12,12 @@ struct EnergyBooks {
   Real elastic = 0;     ///< sum 1/2 K (l - l0)^2 over taut elements [J]
   Real damped = 0;      ///< energy dissipated by the element dashpots since the start [J]
   Real work = 0;        ///< work done on the fabric by loads since the start [J]
+  Real contact = 0;     ///< energy taken out by the contact stage since the start [J] (impulses take, corrections give)
+  Real contactInput = 0;  ///< energy the contact stage put in, summed step by step [J] (>= 0)
   Real initial = 0;     ///< kinetic + elastic at step 0 [J]
 
-  Real total() const { return kinetic + elastic + damped; }
-  /// (kinetic + elastic + damped) - (initial + work) [J]
+  Real total() const { return kinetic + elastic + damped + contact; }
+  /// (kinetic + elastic + damped + contact) - (initial + work) [J]
   Real balanceError() const { return total() - initial - work; }
 };
 

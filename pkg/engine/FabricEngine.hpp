@@ -1,9 +1,10 @@
-// FabricEngine: one step of the whole fabric, top to bottom (docs/design.md). This step is
-// the chain dynamics; collisions (refit, broad phase, narrow phase, response) slot in before it.
+// FabricEngine: one step of the whole fabric, top to bottom (docs/design.md): kick, collisions
+// (refit, broad phase, narrow phase, response: CollisionStage) when enabled, drift, springs.
 // Owns the fabric; the YADE adapter (py/woven/engine.py) calls step(O.dt) once per YADE iteration.
 #pragma once
 #include "core/Types.hpp"
 #include "dynamics/ChainDynamics.hpp"
+#include "engine/CollisionStage.hpp"
 #include "fabric/Fabric.hpp"
 #include "fabric/StateIO.hpp"
 #include <memory>
@@ -26,14 +27,24 @@ class FabricEngine {
   /// Advances one step of dt [s]. Refuses (ParameterError "dt") any dt outside (0, dt_crit].
   void step(Real dt);
 
+  /// Turns collision handling on with these parameters (validated first; nothing changes on bad
+  /// input), or updates them.
+  void enableCollisions(const ContactParams& p, BroadPhase broad = BroadPhase::YarnTree);
+  void disableCollisions() { collisions_.reset(); }
+  /// The collision stage, or nullptr when collisions are off.
+  CollisionStage* collisions() { return collisions_.get(); }
+  const CollisionStage* collisions() const { return collisions_.get(); }
+
   KinematicState state() const;
   KinematicState lastGoodState() const;
-  /// Loads a saved state (same node count), bit for bit.
+  /// Loads a saved state (same node count), bit for bit: positions, velocities, sections (when the
+  /// state has them) and the clock, so the run goes on exactly as the saved one would have.
   void setState(const KinematicState& s);
 
  private:
   std::unique_ptr<Fabric> fabric_;  // heap-held so the dynamics' reference stays valid
   ChainDynamics dynamics_;
+  std::unique_ptr<CollisionStage> collisions_;
 };
 
 }  // namespace woven

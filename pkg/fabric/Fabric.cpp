@@ -19,6 +19,9 @@ Index Fabric::addYarn(const Vec3Array& pts, const YarnMaterial& mat, const YarnS
   y.material = static_cast<Index>(materials.size());
   materials.push_back(mat);
   const Index yi = nYarns();
+  // The section starts circular with the area of the nominal ellipse (pi*w*t/4): flattened at
+  // constant area to the nominal thickness it has exactly the nominal width.
+  const Real r0 = 0.5 * std::sqrt(sec.width * sec.thickness);
 
   for (const Vec3& p : pts) {
     require(p.allFinite(), "points", p.norm(), "finite coordinates [m]");
@@ -27,6 +30,9 @@ Index Fabric::addYarn(const Vec3Array& pts, const YarnMaterial& mat, const YarnS
     force.push_back(Vec3::Zero());
     mass.push_back(0.0);
     nodeYarn.push_back(yi);
+    secRadius.push_back(r0);
+    secFlat.push_back(0.0);
+    secDir.push_back(Vec3::UnitZ());  // any normal to the yarn: made so by updateSectionFrames
   }
   for (Index j = 0; j < y.nElems; ++j) {
     const Index a = y.firstNode + j;

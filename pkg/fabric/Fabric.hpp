@@ -31,6 +31,11 @@ struct Fabric {
   std::vector<Real> invMass;   ///< 1/mass, 0 for kinematic (fixed or velocity-driven) nodes [1/kg]
   std::vector<Index> nodeYarn; ///< yarn of each node
 
+  // --- cross-sections at the nodes (paper Sec. 5.2.2; shape/Section.hpp) ---
+  std::vector<Real> secRadius; ///< natural radius r0 of the circular section at rest [m]
+  std::vector<Real> secFlat;   ///< cross-sectional deformation eps in [0, MCD] [-] (0: circular)
+  Vec3Array secDir;            ///< unit direction of the flattened (minor, b) axis, normal to the yarn [-]
+
   // --- elements (CPs): element e joins nodes elem0[e] and elem0[e]+1 ---
   std::vector<Index> elem0;
   std::vector<Real> restLength;  ///< l0 [m]

@@ -133,11 +133,11 @@ bool obbOverlap(const OBB& a, const OBB& b) {
   return true;
 }
 
-BoxContact obbContact(const OBB& a, const OBB& b, Real slop) {
+BoxContact obbContact(const OBB& a, const OBB& b, Real slop, Real lateralCos) {
   BoxContact out;
   const Frame f(a, b);
-  Real bestDepth = INFINITY;
-  int best = -1;
+  Real bestDepth = INFINITY, lateralDepth = INFINITY;
+  int best = -1, lateral = -1;
   for (int k = 0; k < 15; ++k) {
     const AxisTerms t = axisTerms(k, a, b, f);
     const Real len = k < 6 ? 1.0 : edgeLength(k, f);
@@ -145,7 +145,13 @@ BoxContact obbContact(const OBB& a, const OBB& b, Real slop) {
     if (len < kParallel) continue;                      // degenerate edge axis: no depth from it
     const Real depth = (t.Rsum - t.R) / len;
     if (depth < bestDepth) bestDepth = depth, best = k;  // strict: faces (tested first) win ties
+    if (lateralCos < 1 && depth < lateralDepth) {
+      const Vec3 L = axisVector(k, a, b) / len;
+      if (std::abs(L.dot(a.axis(0))) <= lateralCos && std::abs(L.dot(b.axis(0))) <= lateralCos)
+        lateralDepth = depth, lateral = k;
+    }
   }
+  if (lateral >= 0) best = lateral, bestDepth = lateralDepth;
   out.overlap = true;
   out.axis = best;
   out.depth = bestDepth;

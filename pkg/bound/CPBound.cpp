@@ -1,0 +1,54 @@
+#include "bound/CPBound.hpp"
+#include <algorithm>
+#include <cmath>
+
+namespace woven {
+
+void updateSectionFrames(Fabric& f, Vec3Array& tangent) {
+  tangent.resize(f.pos.size());
+  for (const Yarn& y : f.yarns) {
+    const Index n0 = y.firstNode, n1 = y.firstNode + y.nNodes - 1;
+    for (Index k = n0; k <= n1; ++k) {
+      const Vec3 t = (f.pos[std::min(k + 1, n1)] - f.pos[std::max(k - 1, n0)]).normalized();
+      tangent[k] = t;
+      Vec3 d = f.secDir[k] - f.secDir[k].dot(t) * t;  // turn the section with the yarn
+      const Real len = d.norm();
+      f.secDir[k] = len > 1e-6 ? Vec3(d / len) : t.unitOrthogonal();
+    }
+  }
+}
+
+OBB cpBound(const Fabric& f, const Vec3Array& tangent, Index e, SectionRule rule, Real margin) {
+  const Index i = f.elem0[e], j = i + 1;
+  const Vec3 &x0 = f.pos[i], &x1 = f.pos[j];
+  OBB b;
+  b.centre = 0.5 * (x0 + x1);
+  const Vec3 A0 = (x1 - x0).normalized();
+  const Vec3 &d0 = f.secDir[i], &d1 = f.secDir[j];
+  Vec3 dm = d0 + (d0.dot(d1) < 0 ? Vec3(-d1) : d1);
+  dm -= dm.dot(A0) * A0;
+  const Real len = dm.norm();
+  const Vec3 A2 = len > 1e-9 ? Vec3(dm / len) : A0.unitOrthogonal();
+  b.axes.col(0) = A0;
+  b.axes.col(1) = A2.cross(A0);
+  b.axes.col(2) = A2;
+  const Index node[2] = {i, j};
+  for (int ax = 0; ax < 3; ++ax) {
+    const Vec3 w = b.axes.col(ax);
+    Real ext = 0;
+    for (Index k : node) {
+      const SemiAxes s = semiAxes(f.secRadius[k], f.secFlat[k], rule);
+      const Vec3 u = tangent[k].cross(f.secDir[k]);
+      ext = std::max(ext, std::abs((f.pos[k] - b.centre).dot(w)) + ellipseSupport(u, f.secDir[k], s.a, s.b, w));
+    }
+    b.extent[ax] = ext + margin;
+  }
+  return b;
+}
+
+void refitBounds(const Fabric& f, const Vec3Array& tangent, SectionRule rule, Real margin, std::vector<OBB>& boxes) {
+  boxes.resize(f.elem0.size());
+  for (Index e = 0; e < f.nElems(); ++e) boxes[e] = cpBound(f, tangent, e, rule, margin);
+}
+
+}  // namespace woven

@@ -1,0 +1,174 @@
+#include "engine/CollisionStage.hpp"
+#include "bound/CPBound.hpp"
+#include "core/Errors.hpp"
+#include "law/SectionFlattening.hpp"
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace woven {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+inline double since(Clock::time_point& t) {
+  const auto now = Clock::now();
+  const double s = std::chrono::duration<double>(now - t).count();
+  t = now;
+  return s;
+}
+}  // namespace
+
+BroadPhase broadPhaseByName(const std::string& name) {
+  if (name == "tree") return BroadPhase::YarnTree;
+  if (name == "sap") return BroadPhase::SweepAndPrune;
+  throw ParameterError("broad_phase", "'" + name + "'", "'tree' (OBB tree per yarn) or 'sap' (sweep and prune)");
+}
+
+CollisionStage::CollisionStage(const ContactParams& p, BroadPhase broad) : broadPhase(broad) { setParams(p); }
+
+void CollisionStage::setParams(const ContactParams& p) {
+  p.validate();
+  params_ = p;
+  filter_.selfExclude = p.selfExclude;
+  filter_.yarnExclude.clear();  // configured again for the fabric at the next refit
+}
+
+void CollisionStage::refit(Fabric& f, Real dt) {
+  if (filter_.yarnExclude.size() != f.yarns.size()) filter_.configure(f, params_.selfExclude);
+  updateSectionFrames(f, tangent_);
+  refitBounds(f, tangent_, params_.rule, params_.margin, bounds_);
+  // Each CP's broad-phase box grows by the farthest its nodes can drift in the step.
+  grow_.resize(bounds_.size());
+  for (Index e = 0; e < f.nElems(); ++e) {
+    const Index i = f.elem0[e];
+    grow_[e] = dt * std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm()));
+  }
+  growBoxes(bounds_, grow_, grown_);
+}
+
+void CollisionStage::broad(const Fabric& f) {
+  if (broadPhase == BroadPhase::YarnTree) tree.collide(f, grown_, filter_, pairs_);
+  else sap.collide(f, grown_, filter_, pairs_);
+}
+
+void CollisionStage::narrow(const Fabric& f, Real dt) {
+  contacts_.clear();
+  CPContact c;
+  for (const CPPair& pr : pairs_) {
+    if (cpContactStatic(f, bounds_, pr.a, pr.b, params_.margin, params_.rule, c) ||
+        (dt > 0 && cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c)))
+      contacts_.push_back(c);
+  }
+}
+
+// Paper Sec. 5.1 steps 1-3: take up each overlap by flattening the sections of both CPs (half each,
+// the rest by the other when one is locked), re-test the contacts whose CPs changed, repeat.
+int CollisionStage::flatten(Fabric& f, int maxPasses) {
+  const Real tiny = 1e-15;  // [m]
+  int passes = 0;
+  for (; passes < maxPasses; ++passes) {
+    flatBefore_ = f.secFlat;
+    dirSum_.resize(f.pos.size(), Vec3::Zero());
+    dirty_.assign(f.elem0.size(), 0);
+    bool any = false;
+    for (const CPContact& c : contacts_) {
+      if (c.time > 0 || !(c.gap < -tiny)) continue;
+      const Real need = -c.gap;
+      const Real capA = flatteningCapacity(f, tangent_, c.cpA, c.normal, params_, &flatBefore_);
+      const Real capB = flatteningCapacity(f, tangent_, c.cpB, c.normal, params_, &flatBefore_);
+      if (capA + capB <= tiny) continue;  // locked: left to the impulses
+      Real dA = std::min(capA, 0.5 * need);
+      const Real dB = std::min(capB, need - dA);
+      dA = std::min(capA, need - dB);
+      flattenCP(f, tangent_, c.cpA, c.normal, dA, params_, flatBefore_, dirSum_);
+      flattenCP(f, tangent_, c.cpB, c.normal, dB, params_, flatBefore_, dirSum_);
+      for (Index e : {c.cpA, c.cpB})
+        for (Index k = std::max(e - 1, 0); k <= std::min(e + 1, f.nElems() - 1); ++k)
+          if (f.elemYarn[k] == f.elemYarn[e]) dirty_[k] = 1;
+      ++stats.flattened;
+      any = true;
+    }
+    if (!any) break;
+    turnSections(f, tangent_, flatBefore_, dirSum_);
+    for (Index e = 0; e < f.nElems(); ++e)
+      if (dirty_[e]) bounds_[e] = cpBound(f, tangent_, e, params_.rule, params_.margin);
+    for (CPContact& c : contacts_) {
+      if (c.time > 0 || !(dirty_[c.cpA] || dirty_[c.cpB])) continue;
+      CPContact again;
+      if (cpContactStatic(f, bounds_, c.cpA, c.cpB, params_.margin, params_.rule, again)) c = again;
+      else c.gap = 2 * params_.margin;  // apart now: at least this far
+    }
+  }
+  return passes;
+}
+
+Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
+  auto t = Clock::now();
+  refit(f, dt);
+  stats.seconds[0] += since(t);
+  broad(f);
+  stats.seconds[1] += since(t);
+  narrow(f, dt);
+  stats.seconds[2] += since(t);
+
+  stats.candidates = static_cast<long>(pairs_.size());
+  stats.contacts = static_cast<long>(contacts_.size());
+  stats.moving = 0;
+  for (const CPContact& c : contacts_) stats.moving += c.time > 0;
+  stats.flattened = 0;
+  stats.flattenPasses = flatten(f, params_.flattenPasses);
+  capacity_.resize(contacts_.size());
+  stats.penetration = 0;
+  for (std::size_t k = 0; k < contacts_.size(); ++k) {
+    const CPContact& c = contacts_[k];
+    capacity_[k] = flatteningCapacity(f, tangent_, c.cpA, c.normal, params_) +
+                   flatteningCapacity(f, tangent_, c.cpB, c.normal, params_);
+    stats.penetration = std::max(stats.penetration, -c.gap);
+  }
+  law_.resolve(f, contacts_, capacity_, dt, params_, stats.impulses);
+  stats.correctionEnergy = ImpulseLaw::correctPositions(f, contacts_, params_);
+  stats.seconds[3] += since(t);
+
+  ++stats.steps;
+  stats.maxPenetration = std::max(stats.maxPenetration, stats.penetration);
+  stats.maxUnresolved = std::max(stats.maxUnresolved, stats.impulses.unresolved);
+  stats.maxResidual = std::max(stats.maxResidual, stats.impulses.residual);
+  return stats.impulses.energyChange + stats.correctionEnergy;
+}
+
+Real CollisionStage::afterDrift(Fabric& f, Real) {
+  const Real dE = law_.restitute(f, params_);
+  stats.impulses.energyChange += dE;
+  return dE;
+}
+
+Real CollisionStage::settle(Fabric& f, int maxPasses) {
+  Real left = 0;
+  for (int outer = 0; outer < maxPasses; ++outer) {
+    refit(f, 0);
+    broad(f);
+    narrow(f, 0);
+    const int passes = flatten(f, maxPasses);
+    left = 0;
+    for (const CPContact& c : contacts_) left = std::max(left, -c.gap);
+    if (passes == 0) break;
+  }
+  return left;
+}
+
+Real CollisionStage::overlap(Fabric& f) {
+  refit(f, 0);
+  broad(f);
+  narrow(f, 0);
+  Real worst = 0;
+  for (const CPContact& c : contacts_) worst = std::max(worst, -c.gap);
+  return worst;
+}
+
+void CollisionStage::candidatePairs(Fabric& f, BroadPhase which, std::vector<CPPair>& out) {
+  refit(f, 0);
+  if (which == BroadPhase::YarnTree) tree.collide(f, grown_, filter_, out);
+  else sap.collide(f, grown_, filter_, out);
+}
+
+}  // namespace woven

@@ -1,0 +1,92 @@
+// The collision stage of a step, top to bottom (docs/collisions.md):
+//   refit     section frames and the OBB of every CP (bound functor), grown by its motion in the step
+//   broad     candidate CP pairs (YarnTreeCollider, or the SweepAndPrune reference)
+//   narrow    static SAT contact, else the moving SAT's first contact within the step (geometry functor)
+//   respond   flatten sections (passes), impulses where flattening cannot absorb the approach, then
+//             positional correction of residual overlaps (law)
+// It runs between the kick and the drift (ChainDynamics::StepHook) on x_n and v_{n+1/2}.
+#pragma once
+#include "collider/SweepAndPrune.hpp"
+#include "collider/YarnTreeCollider.hpp"
+#include "dynamics/ChainDynamics.hpp"
+#include "geom/CPContact.hpp"
+#include "law/ImpulseLaw.hpp"
+#include <string>
+
+namespace woven {
+
+enum class BroadPhase : std::uint8_t { YarnTree = 0, SweepAndPrune = 1 };
+/// "tree" or "sap"; throws ParameterError("broad_phase") otherwise.
+BroadPhase broadPhaseByName(const std::string& name);
+
+struct CollisionStats {
+  // last step
+  long candidates = 0;        ///< pairs from the broad phase
+  long contacts = 0;          ///< static + moving contacts
+  long moving = 0;            ///< of which found by the moving test (not touching at the start)
+  long flattened = 0;         ///< contacts whose overlap was (partly) taken up by flattening
+  int flattenPasses = 0;      ///< passes made
+  ImpulseReport impulses;     ///< the impulse solve
+  Real penetration = 0;       ///< largest overlap left after flattening, before correction [m]
+  Real correctionEnergy = 0;  ///< spring energy the positional correction put in [J]
+  // since the start
+  long steps = 0;
+  Real maxPenetration = 0;    ///< [m]
+  long maxUnresolved = 0;     ///< most unresolved impulse rows in one step
+  Real maxResidual = 0;       ///< [m/s]
+  Real seconds[4] = {0, 0, 0, 0};  ///< wall time in refit, broad, narrow, respond [s]
+};
+
+class CollisionStage : public StepHook {
+ public:
+  explicit CollisionStage(const ContactParams& p = ContactParams(), BroadPhase broad = BroadPhase::YarnTree);
+
+  const ContactParams& params() const { return params_; }
+  /// Validates first: nothing changes on bad input.
+  void setParams(const ContactParams& p);
+  BroadPhase broadPhase = BroadPhase::YarnTree;
+
+  /// One collision pass (the StepHook of ChainDynamics). Returns the energy the impulses and the
+  /// positional correction added [J].
+  Real beforeDrift(Fabric& f, Real dt) override;
+  /// The restitution pass of the impulse law (nothing for e = 0).
+  Real afterDrift(Fabric& f, Real dt) override;
+
+  /// Flattens the sections of a fabric at rest until no overlap is left or every overlapping section
+  /// is locked (no velocities or positions change): turns the circular sections of a freshly built
+  /// weave into the flattened ones its crossings need. Returns the largest overlap left [m].
+  Real settle(Fabric& f, int maxPasses = 100);
+
+  /// Largest overlap between CPs (-gap of the static contacts) in the fabric as it stands [m]; moves
+  /// nothing (the sections' frames are brought up to date).
+  Real overlap(Fabric& f);
+
+  const std::vector<CPContact>& contacts() const { return contacts_; }
+  const std::vector<OBB>& bounds() const { return bounds_; }
+  const std::vector<CPPair>& candidates() const { return pairs_; }
+  /// Refits the bounds and lists the candidate pairs with both broad phases at the current state
+  /// (dt = 0): for tests and benchmarks.
+  void candidatePairs(Fabric& f, BroadPhase which, std::vector<CPPair>& out);
+
+  CollisionStats stats;
+  YarnTreeCollider tree;
+  SweepAndPrune sap;
+
+ private:
+  void refit(Fabric& f, Real dt);
+  void broad(const Fabric& f);
+  void narrow(const Fabric& f, Real dt);
+  int flatten(Fabric& f, int maxPasses);
+
+  ContactParams params_;
+  PairFilter filter_;
+  Vec3Array tangent_, dirSum_;
+  std::vector<OBB> bounds_, grown_;
+  std::vector<Real> grow_, capacity_, flatBefore_;
+  std::vector<CPPair> pairs_;
+  std::vector<CPContact> contacts_;
+  std::vector<std::uint8_t> dirty_;
+  ImpulseLaw law_;
+};
+
+}  // namespace woven

@@ -1,0 +1,29 @@
+// Parameters of the collision response (paper Sec. 5), all SI, validated with the allowed ranges.
+#pragma once
+#include "core/Types.hpp"
+#include "shape/Section.hpp"
+
+namespace woven {
+
+struct ContactParams {
+  Real restitution = 0.0;     ///< e of Eq. 5 in [0, 1]; 0: "at the next time moment both nodes move together"
+  Real friction = 0.0;        ///< Coulomb coefficient mu >= 0 (0 as in the paper)
+  Real mcd = 0.6;             ///< maximum cross-sectional deformation in (0, 1) (paper: 0.5-0.7)
+  SectionRule rule = SectionRule::ConstantArea;
+  Real margin = 1e-6;         ///< added to every side of a CP's OBB [m] >= 0: contacts start this close
+  Real tolerance = 1e-6;      ///< Eq. 4 resting band and solver tolerance on normal velocity [m/s] > 0
+  int maxIterations = 50;     ///< bound on the impulse iterations per step, >= 1
+  int flattenPasses = 4;      ///< re-tests of flattened contacts per step (paper's "go to steps 1 and 2"), >= 1
+  /// Fraction in [0, 1] of a residual (locked) overlap removed per step by moving the nodes apart
+  /// (mass-weighted, momentum-free, booked to first order; docs/collisions.md). Box2D's 0.2:
+  /// a whole overlap removed in one step kicks the springs.
+  Real positionCorrection = 0.2;
+  /// CPs of one yarn this many elements apart or closer never collide (>= 1); raised per yarn to
+  /// 1 + ceil(2 r0 / l0) (PairFilter).
+  Index selfExclude = 1;
+
+  /// Throws ParameterError naming the parameter and its allowed range.
+  void validate() const;
+};
+
+}  // namespace woven

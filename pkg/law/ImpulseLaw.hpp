@@ -1,0 +1,76 @@
+// Second half of the paper's response (Sec. 5.1): impulses where flattening cannot take up the
+// approach. For a contact with normal n (A towards B), point weights s_A, s_B along the two CPs, the
+// relative normal velocity of the contact points is (Eq. 4)
+//     vn = (v_B(s_B) - v_A(s_A)) . n,   v_X(s) = (1 - s) v_X0 + s v_X1,
+// approaching when vn < -tolerance, resting within +-tolerance, separating above. An impulse J n
+// on B and -J n on A changes vn by J / m_eff with 1/m_eff = sum over the 4 nodes of w^2/m (the Eq. 5
+// masses seen through the barycentric weights), so Eq. 5 reads J = -(1 + e) vn m_eff.
+//
+// A contact gets an impulse row when its approach within the step exceeds what flattening can still
+// absorb, room = gap + capacity (0 for a contact still overlapping after the flattening passes):
+// vn < -room/dt - tolerance. Two passes, as in Box2D v3:
+//  1. before the drift, target vn' = -room/dt: the pair uses up exactly its room by the end of the
+//     step (a contact found by the moving test closes its gap: no tunnelling, no early stop; a
+//     locked contact in touch stops approaching: Eq. 5 with e = 0);
+//  2. after the drift (restitute), rows that pushed and approached faster than the tolerance get
+//     vn' >= -e vn0: with the pair now in touch, Eq. 5 with the approach speed vn0 it had.
+// Simultaneous rows are solved by projected Gauss-Seidel on accumulated impulses (J >= 0, and the
+// Coulomb friction impulse within mu J) until no row misses its target by more than the tolerance
+// or maxIterations is reached; the residual and unresolved rows are reported, never hidden.
+#pragma once
+#include "fabric/Fabric.hpp"
+#include "geom/CPContact.hpp"
+#include "law/ContactParams.hpp"
+#include <vector>
+
+namespace woven {
+
+struct ImpulseReport {
+  long rows = 0;            ///< contacts that received impulses
+  int iterations = 0;       ///< Gauss-Seidel sweeps made
+  Real residual = 0;        ///< largest miss of a row's target after the last sweep [m/s]
+  long unresolved = 0;      ///< rows still missing their target by more than the tolerance
+  Real energyChange = 0;    ///< change of the step's kinetic energy (v_n) the impulses make [J]
+  Vec3 impulseSum = Vec3::Zero();  ///< sum of m dv over free nodes [N s] (0 up to rounding: momentum)
+};
+
+class ImpulseLaw {
+ public:
+  /// Applies the impulses to Fabric::vel. capacity[c] is contact c's remaining flattening capacity
+  /// along its normal (both CPs) [m]; dt [s] the step.
+  void resolve(Fabric& f, const std::vector<CPContact>& contacts, const std::vector<Real>& capacity, Real dt,
+               const ContactParams& p, ImpulseReport& report);
+
+  /// Pass 2 after the drift: restitution e of the rows of the last resolve() (see above). Returns
+  /// the kinetic energy change [J] (0 for e = 0).
+  Real restitute(Fabric& f, const ContactParams& p);
+
+  /// Moves the nodes of contacts still overlapping (gap < 0) apart along the normal by
+  /// positionCorrection * (-gap), weighted by w/m as an impulse would, each node only across its own
+  /// CP (the part along the CP is dropped: it would load the stiff axial spring at once).
+  /// Only contacts whose gap was measured across both sections: a normal along a yarn (end-on
+  /// contacts, kinked or self-touching yarns) would stretch the stiff axial springs, so those
+  /// overlaps are only kept from growing by the impulses.
+  /// Returns the spring energy this puts in [J] (exact, over the CPs it stretches), for the books.
+  static Real correctPositions(Fabric& f, const std::vector<CPContact>& contacts, const ContactParams& p);
+
+ private:
+  struct Row {
+    Index node[4];
+    Real w[4];          // -(1-sA), -sA, (1-sB), sB: vn = sum w_k v_k . n
+    Vec3 n;
+    Real target, invK;  // invK = m_eff = 1 / sum w^2/m
+    Real vn0;           // normal velocity before the impulses [m/s]
+    Real lambda = 0;    // accumulated normal impulse [N s]
+    Vec3 lambdaT = Vec3::Zero();
+  };
+  int solve(Fabric& f, const ContactParams& p, bool friction);  // Gauss-Seidel sweeps, returns the count
+  void keepVelocities(const Fabric& f);      // of the touched nodes, before the impulses
+  Real energyChange(const Fabric& f) const;  // kinetic energy of the integer step the impulses add [J]
+  std::vector<Row> rows_;
+  Vec3Array vBefore_;
+  Real dt_ = 0;
+  std::vector<Index> touched_;
+};
+
+}  // namespace woven

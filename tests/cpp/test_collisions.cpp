@@ -1,0 +1,376 @@
+// Collision handling: bound functor, colliders, flattening, impulses (conservation laws, Eq. 5),
+// non-penetration, moving test against tunnelling, bad input, state files with sections.
+#include "bound/CPBound.hpp"
+#include "chain_util.hpp"
+#include "engine/FabricEngine.hpp"
+#include "geom/SeparatingAxis.hpp"
+#include "law/ImpulseLaw.hpp"
+#include "weave/WeaveBuilder.hpp"
+#include <gtest/gtest.h>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <random>
+
+using namespace woven;
+using namespace woven_test;
+
+namespace {
+
+YarnSection roundSection(Real r) {
+  YarnSection s;
+  s.width = s.thickness = 2 * r;
+  return s;
+}
+
+/// Yarn along direction (cos th, sin th, 0) through (0, 0, z) with n elements of length l0, centred.
+Vec3Array line(Real th, Real z, int n, Real l0) {
+  Vec3Array p;
+  const Vec3 d(std::cos(th), std::sin(th), 0);
+  for (int i = 0; i <= n; ++i) p.push_back(Vec3(0, 0, z) + (i - 0.5 * n) * l0 * d);
+  return p;
+}
+
+/// Two single-CP yarns, parallel to x, A at z = 0, B at z = gap: the head-on pair of the impulse tests.
+Fabric cpPair(Real gap, Real r = 1e-4, Real l0 = 1e-3) {
+  Fabric f;
+  f.addYarn(line(0, 0, 1, l0), km2Material(), roundSection(r));
+  f.addYarn(line(0, gap, 1, l0), km2Material(), roundSection(r));
+  return f;
+}
+
+Real kinetic(const Fabric& f) {
+  Real k = 0;
+  for (Index i = 0; i < f.nNodes(); ++i) k += 0.5 * f.mass[i] * f.vel[i].squaredNorm();
+  return k;
+}
+Vec3 momentum(const Fabric& f) {
+  Vec3 p = Vec3::Zero();
+  for (Index i = 0; i < f.nNodes(); ++i) p += f.mass[i] * f.vel[i];
+  return p;
+}
+
+}  // namespace
+
+TEST(CPBound, EnclosesTheEllipticCylinderAndTouchesIt) {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<Real> U(-1, 1), F(0, 0.6);
+  for (SectionRule rule : {SectionRule::Paper, SectionRule::ConstantArea}) {
+    Vec3Array pts{Vec3::Zero()};
+    for (int i = 0; i < 8; ++i) pts.push_back(pts.back() + Vec3(1e-3, 0, 0) + 4e-4 * Vec3(U(rng), U(rng), U(rng)));
+    Fabric f;
+    f.addYarn(pts, km2Material(), roundSection(2e-4));
+    for (Index k = 0; k < f.nNodes(); ++k) f.secFlat[k] = F(rng), f.secDir[k] = Vec3(U(rng), U(rng), U(rng));
+    Vec3Array t;
+    updateSectionFrames(f, t);
+    const Real margin = 1e-6;
+    for (Index e = 0; e < f.nElems(); ++e) {
+      const OBB b = cpBound(f, t, e, rule, margin);
+      Vec3 reach = Vec3::Zero();
+      for (Index k : {f.elem0[e], f.elem0[e] + 1}) {
+        EXPECT_NEAR(f.secDir[k].dot(t[k]), 0, 1e-12);
+        const SemiAxes s = semiAxes(f.secRadius[k], f.secFlat[k], rule);
+        const Vec3 u = t[k].cross(f.secDir[k]);
+        for (int q = 0; q < 720; ++q) {
+          const Real phi = q * M_PI / 360;
+          const Vec3 p = f.pos[k] + s.a * std::cos(phi) * u + s.b * std::sin(phi) * f.secDir[k];
+          EXPECT_LE(b.outside(p), -margin + 1e-15) << "rule " << int(rule) << " CP " << e;
+          reach = reach.cwiseMax((b.axes.transpose() * (p - b.centre)).cwiseAbs());
+        }
+      }
+      // Tight: each face is touched by the sampled ellipses to the sampling resolution (1 - cos(pi/720)).
+      for (int ax = 0; ax < 3; ++ax) EXPECT_GT(reach[ax], (b.extent[ax] - margin) * (1 - 1e-5)) << ax;
+    }
+  }
+}
+
+TEST(Collider, TreeSweepAndPruneAndBruteForceGiveTheSamePairs) {
+  WeaveParams p = km2_706();
+  p.nx = 4, p.ny = 4;
+  Weave w = buildWeave(p);
+  FabricEngine eng(std::move(w.fabric));
+  eng.enableCollisions(ContactParams());
+  CollisionStage& cs = *eng.collisions();
+  Fabric& f = eng.fabric();
+  std::mt19937 rng(11);
+  std::normal_distribution<Real> G(0, 1);
+  long rebuiltFirst = 0;
+  for (int trial = 0; trial < 4; ++trial) {
+    if (trial > 0) {  // bend and shift the yarns, flatten random sections
+      for (Vec3& x : f.pos) x += 1e-4 * trial * Vec3(G(rng), G(rng), G(rng));
+      for (Real& e : f.secFlat) e = 0.3 * std::abs(G(rng)) > 0.6 ? 0.6 : 0.3 * std::abs(G(rng));
+    }
+    std::vector<CPPair> tree, sap;
+    cs.candidatePairs(f, BroadPhase::YarnTree, tree);
+    if (trial == 0) rebuiltFirst = cs.tree.stats.rebuiltNodes;
+    cs.candidatePairs(f, BroadPhase::SweepAndPrune, sap);
+    // Brute force over all pairs with the same box test.
+    std::vector<CPPair> brute;
+    PairFilter filter;
+    filter.configure(f, 1);
+    const std::vector<OBB>& b = cs.bounds();
+    for (Index i = 0; i < f.nElems(); ++i)
+      for (Index j = i + 1; j < f.nElems(); ++j)
+        if (!filter.excluded(f, i, j) && obbOverlap(b[i], b[j])) brute.push_back({i, j});
+    ASSERT_GT(brute.size(), 100u) << "trial " << trial;
+    EXPECT_EQ(tree, brute) << "trial " << trial;
+    EXPECT_EQ(sap, brute) << "trial " << trial;
+  }
+  EXPECT_GT(cs.tree.stats.rebuiltNodes, rebuiltFirst);  // the bent yarns degraded some nodes
+}
+
+TEST(ImpulseLaw, EachImpulseConservesMomentum) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<Real> U(-1, 1), S(0, 1);
+  ContactParams p;
+  ImpulseLaw law;
+  for (int trial = 0; trial < 2000; ++trial) {
+    Fabric f = cpPair(1e-4 * (1 + S(rng)));
+    for (Vec3& v : f.vel) v = 100 * Vec3(U(rng), U(rng), U(rng));
+    p.restitution = S(rng), p.friction = trial % 2 ? 0.0 : 2 * S(rng);
+    CPContact c;
+    c.cpA = 0, c.cpB = 1, c.gap = 0, c.sA = S(rng), c.sB = S(rng);
+    c.normal = Vec3(U(rng), U(rng), U(rng)).normalized();
+    const Vec3 p0 = momentum(f);
+    Real scale = 0;
+    for (Index i = 0; i < f.nNodes(); ++i) scale += f.mass[i] * f.vel[i].norm();
+    ImpulseReport rep;
+    law.resolve(f, {c}, {0.0}, 1e-8, p, rep);
+    EXPECT_LE((momentum(f) - p0).norm(), 1e-12 * scale);
+    const Real dE = rep.energyChange + law.restitute(f, p);
+    EXPECT_LE((momentum(f) - p0).norm(), 1e-12 * scale);
+    if (rep.rows) {
+      EXPECT_LE(dE, 1e-12 * kinetic(f));  // e <= 1 and friction never add energy
+    }
+  }
+}
+
+TEST(ImpulseLaw, HeadOnPairElasticKeepsEnergyPlasticEndsTogether) {
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<Real> S(0, 1);
+  for (int trial = 0; trial < 200; ++trial) {
+    for (Real e : {0.0, 1.0}) {
+      Fabric f = cpPair(2e-4);
+      const Real vA = 50 + 100 * S(rng), vB = -(10 + 100 * S(rng));  // approaching along z
+      f.vel[0] = f.vel[1] = Vec3(0, 0, vA);
+      f.vel[2] = f.vel[3] = Vec3(0, 0, vB);
+      f.vel[1].z() += 20 * S(rng);  // and a spin of A
+      ContactParams p;
+      p.restitution = e;
+      CPContact c;
+      c.cpA = 0, c.cpB = 1, c.gap = 0, c.normal = Vec3::UnitZ(), c.sA = S(rng), c.sB = S(rng);
+      const Real ke0 = kinetic(f);
+      auto vn = [&] {
+        return ((1 - c.sB) * f.vel[2] + c.sB * f.vel[3] - (1 - c.sA) * f.vel[0] - c.sA * f.vel[1]).dot(c.normal);
+      };
+      const Real vn0 = vn();
+      ImpulseLaw law;
+      ImpulseReport rep;
+      law.resolve(f, {c}, {0.0}, 1e-8, p, rep);  // pass 1: stop the approach
+      law.restitute(f, p);                         // pass 2: give back e of it (Eq. 5 in total)
+      ASSERT_EQ(rep.rows, 1);
+      EXPECT_EQ(rep.unresolved, 0);
+      if (e == 1) {
+        EXPECT_NEAR(kinetic(f), ke0, 1e-9 * ke0);
+        EXPECT_NEAR(vn(), -vn0, 1e-9 * std::abs(vn0));
+      } else {
+        EXPECT_NEAR(vn(), 0, 1e-12 * std::abs(vn0));  // the contact points move together along n
+        EXPECT_LT(kinetic(f), ke0);
+      }
+    }
+  }
+}
+
+TEST(Flattening, CrossingRoundYarnsFlattenToTheGapAndLockAtTheMCD) {
+  const Real r0 = 1e-4, l0 = 2e-4;
+  for (SectionRule rule : {SectionRule::ConstantArea, SectionRule::Paper}) {
+    for (Real g0 : {1.2e-4, 0.6e-4}) {  // centre gap: needs eps = 0.4 (free) or 0.7 (> MCD 0.6: locked)
+      Fabric f;
+      f.addYarn(line(0, 0, 4, l0), km2Material(), roundSection(r0));
+      f.addYarn(line(M_PI / 2, g0, 4, l0), km2Material(), roundSection(r0));
+      ContactParams p;
+      p.rule = rule;
+      CollisionStage cs(p);
+      const Real left = cs.settle(f);
+      const Index midA = 2, midB = 5 + 2;  // the crossing nodes
+      const Real epsNeed = 1 - 0.5 * g0 / r0;
+      for (Index k : {midA, midB}) {
+        const SemiAxes s = semiAxes(f.secRadius[k], f.secFlat[k], rule);
+        if (epsNeed < p.mcd) {
+          EXPECT_NEAR(s.b, 0.5 * g0, 1e-9 * r0) << "rule " << int(rule);
+        } else {
+          EXPECT_EQ(f.secFlat[k], p.mcd);
+        }
+        EXPECT_NEAR(std::abs(f.secDir[k].z()), 1, 1e-12);  // flattened along the contact normal
+        if (rule == SectionRule::ConstantArea) EXPECT_NEAR(s.a * s.b, r0 * r0, 1e-12 * r0 * r0);
+        else EXPECT_NEAR(s.a, r0 * (1 + f.secFlat[k]), 1e-15);
+        EXPECT_LE(f.secFlat[k], p.mcd);
+      }
+      if (epsNeed < p.mcd) EXPECT_LE(left, 1e-9 * r0);
+      else EXPECT_NEAR(left, 2 * r0 * (1 - p.mcd) - g0, 1e-9 * r0);  // what the MCD leaves to the impulses
+    }
+  }
+}
+
+TEST(CollisionParams, BadInputNamesTheParameter) {
+  auto bad = [](auto edit) {
+    ContactParams p;
+    edit(p);
+    return parameterOf([&] { p.validate(); });
+  };
+  EXPECT_EQ(bad([](ContactParams& p) { p.mcd = 0; }), "mcd");
+  EXPECT_EQ(bad([](ContactParams& p) { p.mcd = 1; }), "mcd");
+  EXPECT_EQ(bad([](ContactParams& p) { p.mcd = NAN; }), "mcd");
+  EXPECT_EQ(bad([](ContactParams& p) { p.restitution = -0.01; }), "restitution");
+  EXPECT_EQ(bad([](ContactParams& p) { p.restitution = 1.01; }), "restitution");
+  EXPECT_EQ(bad([](ContactParams& p) { p.friction = -1e-3; }), "friction");
+  EXPECT_EQ(bad([](ContactParams& p) { p.margin = -1e-9; }), "margin");
+  EXPECT_EQ(bad([](ContactParams& p) { p.tolerance = 0; }), "tolerance");
+  EXPECT_EQ(bad([](ContactParams&) {}), "");
+  FabricEngine eng(cpPair(1e-3));
+  ContactParams p;
+  p.mcd = 1.5;
+  EXPECT_EQ(parameterOf([&] { eng.enableCollisions(p); }), "mcd");
+  EXPECT_EQ(eng.collisions(), nullptr);  // nothing changed
+  EXPECT_EQ(parameterOf([&] { sectionRuleByName("oval"); }), "section_rule");
+}
+
+// A thin CP shot across a yarn at 1000 m/s with dt at the stable limit moves 25x its own thickness
+// per step, so only the moving test can stop it. Against a fixed yarn: e = 1 sends it back at
+// 1000 m/s, e = 0 stops it in touch; against a yarn clamped at its ends (200 m/s) it never passes
+// through.
+TEST(MovingContact, NoTunnellingAt1000MetresPerSecond) {
+  const Real r0 = 5e-6, l0 = 2e-3;  // 10 um thick yarns, 2 mm CPs: dt_crit ~ 2.5e-7 s, 250 um per step
+  for (bool fixedTarget : {true, false}) {
+    for (Real e : {0.0, 1.0}) {
+      for (Real offset : {0.0, 0.37, 0.5, 0.9}) {  // where along A's CP (0.5: on a node) the shot lands
+        Fabric f;
+        f.addYarn(line(0, 0, 6, l0), km2Material(), roundSection(r0));
+        Vec3Array pts = line(M_PI / 2, 2.3e-3, 1, l0);
+        for (Vec3& x : pts) x.x() += (offset - 0.5) * l0;
+        f.addYarn(pts, km2Material(), roundSection(r0));
+        // Against the clamped yarn at 200 m/s (the ballistic speed): at 1000 m/s it would stretch
+        // past any failure strain before stopping the shot.
+        const Real speed = fixedTarget ? 1000 : 200;
+        f.vel[7] = f.vel[8] = Vec3(0, 0, -speed);
+        FabricEngine eng(std::move(f));
+        for (Index i = 0; i <= 6; ++i)
+          if (fixedTarget || i == 0 || i == 6) eng.dynamics().fix(i);
+        ContactParams p;
+        p.restitution = e;
+        eng.enableCollisions(p);
+        const Real dt = eng.criticalDt();
+        Real minGap = INFINITY;
+        for (int s = 0; s < 60; ++s) {
+          eng.step(dt);
+          const Fabric& g = eng.fabric();
+          const Vec3 b = 0.5 * (g.pos[7] + g.pos[8]);  // B's centre over A's centre line below it
+          const Index k = std::min<Index>(5, static_cast<Index>(std::floor(b.x() / l0 + 3)));
+          const Real t = (b.x() - g.pos[k].x()) / (g.pos[k + 1].x() - g.pos[k].x());
+          minGap = std::min(minGap, b.z() - ((1 - t) * g.pos[k].z() + t * g.pos[k + 1].z()));
+        }
+        const std::string what = "fixed " + std::to_string(fixedTarget) + " e " + std::to_string(e) + " offset " +
+                                 std::to_string(offset);
+        EXPECT_GT(minGap, 0) << what;
+        const CollisionStats& st = eng.collisions()->stats;
+        EXPECT_GT(st.steps, 0);
+        if (fixedTarget) {
+          EXPECT_LT(st.maxPenetration, 0.01 * 2 * r0) << what;
+          EXPECT_GT(minGap, 2 * r0 * (1 - p.mcd) - 0.01 * 2 * r0) << what;  // no deeper than the locked sections
+          const Real vz = 0.5 * (eng.fabric().vel[7].z() + eng.fabric().vel[8].z());
+          EXPECT_NEAR(vz, e * speed, 1e-6 * speed) << what;  // Eq. 5 through the weights, B's spin aside
+        }
+      }
+    }
+  }
+}
+
+// Yarns dropped (free, 1-10 m/s) or pressed (ends driven down, then held) onto a closed layer of
+// clamped yarns, at random angles (30-150 degrees to the layer), offsets and restitutions. Transient
+// overlaps appear where flattened sections widen into their neighbours or a CP turns end-on (yarns
+// have no bending stiffness); the positional correction removes them. In the state each run hands
+// over, the largest overlap stays under 1 % of the yarn thickness.
+TEST(NonPenetration, RandomDropsAndPressesOntoALayer) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<Real> U(-1, 1), S(0, 1);
+  const Real r0 = 1e-4, l0 = 2e-4;
+  const int seeds = kSlowBuild ? 2 : 6;
+  for (int seed = 0; seed < seeds; ++seed) {
+    for (bool press : {false, true}) {
+      Fabric f;
+      for (int k = 0; k < 3; ++k) {
+        Vec3Array pts = line(0, 0, 12, l0);
+        for (Vec3& x : pts) x.y() += (k - 1) * 3 * r0;  // a closed layer: at the MCD, 2a = 3 r0
+        f.addYarn(pts, km2Material(0.3), roundSection(r0));
+      }
+      const Index firstDropped = f.nNodes();
+      for (int k = 0; k < 2; ++k) {
+        Vec3Array pts = line(M_PI * (1 + 4 * S(rng)) / 6, 2.2 * r0 + 2.2 * r0 * k, 10, l0);  // 30-150 deg to the layer
+        const Vec3 shift = Vec3(U(rng), U(rng), 0) * 3e-4;
+        for (Vec3& x : pts) x += shift;
+        f.addYarn(pts, km2Material(0.3), roundSection(r0));
+      }
+      const Real speed = 1 + 9 * S(rng);
+      for (Index i = firstDropped; i < f.nNodes(); ++i) f.vel[i] = Vec3(0, 0, -speed);
+      FabricEngine eng(std::move(f));
+      const Fabric& g = eng.fabric();
+      for (Index y = 0; y < 3; ++y) eng.dynamics().fix(g.yarns[y].firstNode), eng.dynamics().fix(g.yarns[y].firstNode + 12);
+      std::vector<Index> pressed;
+      if (press)
+        for (Index y = 3; y < 5; ++y) pressed.push_back(g.yarns[y].firstNode), pressed.push_back(g.yarns[y].firstNode + 10);
+      for (Index i : pressed) eng.dynamics().prescribeVelocity(i, Vec3(0, 0, -speed));
+      ContactParams p;
+      p.mcd = 0.5;
+      p.restitution = 0.3 * S(rng);
+      p.rule = SectionRule::Paper;
+      eng.enableCollisions(p);
+      const Real dt = 0.7 * eng.criticalDt();
+      const int travel = static_cast<int>(std::ceil(2 * r0 / speed / dt));  // down to the layer and into it
+      for (int s = 0; s < travel; ++s) eng.step(dt);
+      for (Index i : pressed) eng.dynamics().fix(i);  // hold the press
+      for (int s = 0; s < 1000; ++s) eng.step(dt);
+      const CollisionStats& st = eng.collisions()->stats;
+      const std::string what = "seed " + std::to_string(seed) + (press ? " pressed" : " dropped");
+      const Real left = eng.collisions()->overlap(eng.fabric());  // in the state the run hands over
+      EXPECT_LT(left, 0.01 * 2 * r0) << what << ", largest transient " << st.maxPenetration;
+      EXPECT_EQ(st.impulses.unresolved, 0) << what;
+      Real maxFlat = 0;  // the yarns met: sections flattened somewhere
+      for (Real e : g.secFlat) maxFlat = std::max(maxFlat, e);
+      EXPECT_GT(maxFlat, 0) << what;
+      EXPECT_GT(st.contacts, 0) << what;
+    }
+  }
+}
+
+TEST(StateIO, SectionsAndClockRoundTripAndTheRunContinuesBitForBit) {
+  WeaveParams p = km2_706();
+  p.nx = p.ny = 2;
+  auto fresh = [&] {
+    auto e = std::make_unique<FabricEngine>(buildWeave(p).fabric);
+    e->enableCollisions(ContactParams());
+    e->collisions()->settle(e->fabric());
+    for (const Yarn& y : e->fabric().yarns)
+      if (y.family == YarnFamily::Warp) e->dynamics().prescribeVelocity(y.firstNode + y.nNodes - 1, Vec3(2, 0, 0));
+    return e;
+  };
+  auto a = fresh();
+  const Real dt = 0.7 * a->criticalDt();
+  for (int s = 0; s < 40; ++s) a->step(dt);
+  const std::string path = ::testing::TempDir() + "/woven_sections.state";
+  saveState(path, a->state());
+  for (int s = 0; s < 40; ++s) a->step(dt);
+
+  auto b = fresh();
+  b->setState(loadState(path, b->fabric().nNodes()));
+  EXPECT_EQ(b->dynamics().stepCount(), 40);
+  for (int s = 0; s < 40; ++s) b->step(dt);
+  const Fabric &fa = a->fabric(), &fb = b->fabric();
+  EXPECT_EQ(std::memcmp(fa.pos.data(), fb.pos.data(), fa.pos.size() * sizeof(Vec3)), 0);
+  EXPECT_EQ(std::memcmp(fa.vel.data(), fb.vel.data(), fa.vel.size() * sizeof(Vec3)), 0);
+  EXPECT_EQ(std::memcmp(fa.secFlat.data(), fb.secFlat.data(), fa.secFlat.size() * sizeof(Real)), 0);
+  EXPECT_EQ(std::memcmp(fa.secDir.data(), fb.secDir.data(), fa.secDir.size() * sizeof(Vec3)), 0);
+  Real maxFlat = 0;
+  for (Real e : fa.secFlat) maxFlat = std::max(maxFlat, e);
+  EXPECT_GT(maxFlat, 0.3);  // the sections were part of the state
+  std::remove(path.c_str());
+}
