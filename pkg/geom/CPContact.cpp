@@ -21,9 +21,11 @@ void fill(const Fabric& f, Index a, Index b, const BoxContact& c, CPContact& out
 SectionLine sectionSurfaceAlong(const Fabric& f, Index e, const Vec3& p, const Vec3& m, SectionRule rule, Real& lambda) {
   const Index i = f.elem0[e], j = i + 1;
   const Vec3 axis = f.pos[j] - f.pos[i];
-  // Up to half a CP beyond an end face the yarn goes on in the next CP: use the end section there.
+  if (std::abs(m.dot(axis)) > kLateralCos * axis.norm()) return SectionLine::Axial;
+  // A point beyond an end face (by more than a tenth of the CP: the joint's end section) lies on
+  // the next CP of the yarn, which has its own contacts.
   const Real sRaw = (p - f.pos[i]).dot(axis) / axis.squaredNorm();
-  if (sRaw < -0.5 || sRaw > 1.5 || std::abs(m.dot(axis)) > kLateralCos * axis.norm()) return SectionLine::Axial;
+  if (sRaw < -0.1 || sRaw > 1.1) return SectionLine::Beside;
   const Real s = std::min(Real(1), std::max(Real(0), sRaw));
   const Vec3 t = (f.pos[j] - f.pos[i]).normalized();
   const Vec3 c = (1 - s) * f.pos[i] + s * f.pos[j];

@@ -15,12 +15,12 @@ constexpr Real kLateralCos = 0.70710678118654752;
 
 enum class SectionLine : std::uint8_t {
   Hit,       ///< the line meets the section: lambda is set
-  Beside,    ///< the line passes beside the section: the CP's body is not on it
-  Axial,     ///< the line runs along the CP (|m.t| > kLateralCos) or beyond its ends: no section answer
+  Beside,    ///< the line passes beside the section, or beyond the CP's ends: the CP's body is not on it
+  Axial,     ///< the line runs along the CP (|m.t| > kLateralCos): no section answer
 };
 /// Where the elliptic cylinder of CP e ends along the line p + lambda m (m unit): the largest lambda
 /// [m] with p + lambda m inside the CP's section at p's place along the CP (end sections
-/// interpolated linearly; up to half a CP beyond an end the end section, as the yarn goes on).
+/// interpolated linearly; within a tenth of the CP beyond an end, the end section).
 SectionLine sectionSurfaceAlong(const Fabric& f, Index e, const Vec3& p, const Vec3& m, SectionRule rule, Real& lambda);
 
 struct CPContact {
