@@ -105,7 +105,8 @@ bp::dict energyDict(FabricEngine& e) {
   const EnergyBooks b = e.dynamics().energy();
   bp::dict d;
   d["kinetic"] = b.kinetic, d["elastic"] = b.elastic, d["damped"] = b.damped, d["work"] = b.work;
-  d["initial"] = b.initial, d["balance_error"] = b.balanceError();
+  d["initial"] = b.initial, d["contact"] = b.contact, d["contact_input"] = b.contactInput;
+  d["balance_error"] = b.balanceError();
   return d;
 }
 Vec3 reactionOf(FabricEngine& e, bp::object nodes) {
@@ -145,6 +146,59 @@ void setCheckpointInterval(FabricEngine& e, long k) {
   e.dynamics().limits.checkpointInterval = k;
 }
 bool isKinematic(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.dynamics().isKinematic(i); }
+
+// --- collisions ---
+void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real mcd, const std::string& rule, Real margin,
+                        Real tolerance, int maxIterations, int flattenPasses, Real positionCorrection,
+                        Real correctionSlop, Index selfExclude, const std::string& broad) {
+  ContactParams p;
+  p.restitution = restitution, p.friction = friction, p.mcd = mcd, p.rule = sectionRuleByName(rule);
+  p.margin = margin, p.tolerance = tolerance, p.maxIterations = maxIterations, p.flattenPasses = flattenPasses;
+  p.positionCorrection = positionCorrection, p.correctionSlop = correctionSlop, p.selfExclude = selfExclude;
+  e.enableCollisions(p, broadPhaseByName(broad));
+}
+CollisionStage& stageOf(FabricEngine& e) {
+  if (!e.collisions())
+    throw ParameterError("collisions", "off", "on: call FabricEngine.enable_collisions(...) first");
+  return *e.collisions();
+}
+bp::dict collisionStats(FabricEngine& e) {
+  const CollisionStats& s = stageOf(e).stats;
+  bp::dict d;
+  d["steps"] = s.steps, d["candidates"] = s.candidates, d["contacts"] = s.contacts, d["moving"] = s.moving;
+  d["flattened"] = s.flattened, d["flatten_passes"] = s.flattenPasses;
+  d["impulse_rows"] = s.impulses.rows, d["iterations"] = s.impulses.iterations, d["residual"] = s.impulses.residual;
+  d["unresolved"] = s.impulses.unresolved, d["penetration"] = s.penetration, d["max_penetration"] = s.maxPenetration;
+  d["max_unresolved"] = s.maxUnresolved, d["max_residual"] = s.maxResidual;
+  d["correction_energy"] = s.correctionEnergy;
+  d["seconds_refit"] = s.seconds[0], d["seconds_broad"] = s.seconds[1];
+  d["seconds_narrow"] = s.seconds[2], d["seconds_respond"] = s.seconds[3];
+  d["tree_rebuilt_nodes"] = stageOf(e).tree.stats.rebuiltNodes;
+  return d;
+}
+bp::object candidatePairsPy(FabricEngine& e, const std::string& broad) {
+  std::vector<CPPair> pairs;
+  stageOf(e).candidatePairs(e.fabric(), broadPhaseByName(broad), pairs);
+  std::vector<Index> flat;
+  for (const CPPair& q : pairs) flat.push_back(q.a), flat.push_back(q.b);
+  return bytesOf(flat);
+}
+bp::object contactsPy(FabricEngine& e) {  // cpA, cpB, gap [m], normal x y z per contact of the last step
+  std::vector<Real> out;
+  for (const CPContact& c : stageOf(e).contacts())
+    out.insert(out.end(), {Real(c.cpA), Real(c.cpB), c.gap, c.normal.x(), c.normal.y(), c.normal.z()});
+  return bytesOf(out);
+}
+bp::object semiAxesPy(FabricEngine& e) {  // a, b per node [m] with the stage's section rule
+  const Fabric& f = e.fabric();
+  const SectionRule rule = stageOf(e).params().rule;
+  std::vector<Real> out;
+  for (Index k = 0; k < f.nNodes(); ++k) {
+    const SemiAxes s = semiAxes(f.secRadius[k], f.secFlat[k], rule);
+    out.push_back(s.a), out.push_back(s.b);
+  }
+  return bytesOf(out);
+}
 
 OBB makeObb(const Vec3& c, const Mat3& axes, const Vec3& e) {
   require(c.allFinite() && axes.allFinite(), "centre/axes", 0, "finite values");
@@ -291,7 +345,7 @@ BOOST_PYTHON_MODULE(_woven) {
       .def("is_kinematic", &isKinematic, (bp::arg("node")))
       .def("set_point_force", &pointForce, (bp::arg("node"), bp::arg("force")), "[N]")
       .def("reaction", &reactionOf, (bp::arg("nodes")), "support force on these kinematic nodes [N]")
-      .def("energy", &energyDict, "kinetic, elastic, damped, work, initial, balance_error [J]")
+      .def("energy", &energyDict, "kinetic, elastic, damped, work, initial, contact (taken by the contact stage), contact_input, balance_error [J]")
       .def("_positions", +[](FabricEngine& e) { return bytesOf(e.fabric().pos); })
       .def("_velocities", &syncVelocities)
       .def("_strains", +[](FabricEngine& e) { e.dynamics().refreshForces(); return bytesOf(e.fabric().strain); })
@@ -300,7 +354,31 @@ BOOST_PYTHON_MODULE(_woven) {
       .def("_rest_lengths", +[](FabricEngine& e) { return bytesOf(e.fabric().restLength); })
       .def("_element_first_nodes", +[](FabricEngine& e) { return bytesOf(e.fabric().elem0); })
       .def("save_state", &saveStatePy, (bp::arg("path"), bp::arg("last_good") = false),
-           "Writes positions and velocities, bit for bit (last_good: the last state that passed the checks).")
+           "Writes positions, velocities, sections and the clock, bit for bit (last_good: the last state "
+           "that passed the checks).")
       .def("load_state", &loadStatePy, (bp::arg("path")))
-      .def("restore_last_good", +[](FabricEngine& e) { e.dynamics().restoreLastGood(); });
+      .def("restore_last_good", +[](FabricEngine& e) { e.dynamics().restoreLastGood(); })
+      .add_property("velocity_ramp", +[](FabricEngine& e) { return e.dynamics().loads().velocityRamp; },
+                    +[](FabricEngine& e, Real t) { e.dynamics().setVelocityRamp(t); },
+                    "prescribed velocities grow linearly over this time from t = 0 [s] (0: at once)")
+      .def("enable_collisions", &enableCollisionsPy,
+           (bp::arg("restitution") = 0.0, bp::arg("friction") = 0.0, bp::arg("mcd") = 0.6,
+            bp::arg("section_rule") = "constant_area", bp::arg("margin") = 1e-6, bp::arg("tolerance") = 1e-6,
+            bp::arg("max_iterations") = 50, bp::arg("flatten_passes") = 4, bp::arg("position_correction") = 0.2,
+            bp::arg("correction_slop") = 0.5e-6, bp::arg("self_exclude") = 1, bp::arg("broad_phase") = "tree"),
+           "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction >= 0, mcd in (0, 1), "
+           "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
+           "in [0, 1] per step, correction_slop [m], broad_phase 'tree' or 'sap'. See woven.contact.")
+      .def("disable_collisions", +[](FabricEngine& e) { e.disableCollisions(); })
+      .add_property("collisions_enabled", +[](FabricEngine& e) { return e.collisions() != nullptr; })
+      .def("settle_sections", +[](FabricEngine& e, int passes) { return stageOf(e).settle(e.fabric(), passes); },
+           (bp::arg("max_passes") = 100),
+           "Flattens the sections where yarns overlap, moving nothing; returns the overlap left [m].")
+      .def("overlap", +[](FabricEngine& e) { return stageOf(e).overlap(e.fabric()); },
+           "Largest overlap between CPs in the current state [m].")
+      .def("collision_stats", &collisionStats, "dict: last step's counts, and maxima since the start (SI)")
+      .def("_candidate_pairs", &candidatePairsPy, (bp::arg("broad_phase")))
+      .def("_contacts", &contactsPy)
+      .def("_section_flattening", +[](FabricEngine& e) { return bytesOf(e.fabric().secFlat); })
+      .def("_section_semi_axes", &semiAxesPy);
 }

@@ -33,6 +33,11 @@ void ChainDynamics::prescribeVelocity(Index i, const Vec3& v) {
   f_.vel[i] = v;
 }
 
+void ChainDynamics::setVelocityRamp(Real seconds) {
+  require(std::isfinite(seconds) && seconds >= 0, "velocity_ramp", seconds, "[0, inf) s");
+  loads_.velocityRamp = seconds;
+}
+
 void ChainDynamics::release(Index i) {
   f_.checkNode(i);
   auto it = std::find(loads_.kinematicNodes.begin(), loads_.kinematicNodes.end(), i);
@@ -226,8 +231,9 @@ void ChainDynamics::computeForces(Real dt) {
 void ChainDynamics::step(Real dt, StepHook* hook) {
   if (!(std::isfinite(dt) && dt > 0)) throw ParameterError("dt", fmt(dt), "(0, dt_crit] s");
   if (!started_) start();
+  const Real ramp = loads_.velocityRamp > 0 ? std::min(Real(1), (time_ + 0.5 * dt) / loads_.velocityRamp) : 1.0;
   for (std::size_t k = 0; k < loads_.kinematicNodes.size(); ++k)
-    f_.vel[loads_.kinematicNodes[k]] = loads_.kinematicVelocity[k];
+    f_.vel[loads_.kinematicNodes[k]] = ramp * loads_.kinematicVelocity[k];
   Vec3 p;
   const bool gravity = loads_.bodyAcceleration.squaredNorm() > 0;
   Real ke;

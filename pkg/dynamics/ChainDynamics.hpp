@@ -49,6 +49,9 @@ class ChainDynamics {
   /// Drives node i at velocity v [m/s] from now on (v = 0 fixes it).
   void prescribeVelocity(Index i, const Vec3& v);
   void fix(Index i) { prescribeVelocity(i, Vec3::Zero()); }
+  /// Prescribed velocities reach their value linearly over `seconds` from time 0 (0: at once), so
+  /// grips start without a shock wave.
+  void setVelocityRamp(Real seconds);
   /// Makes a kinematic node free again.
   void release(Index i);
   /// Constant point force [N] on node i (zero removes it).

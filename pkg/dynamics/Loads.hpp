@@ -11,6 +11,7 @@ struct Loads {
 
   std::vector<Index> kinematicNodes;     ///< nodes whose velocity is prescribed (fixed: zero)
   Vec3Array kinematicVelocity;           ///< their velocity [m/s]
+  Real velocityRamp = 0;                 ///< prescribed velocities grow linearly from 0 over this time [s] (0: at once)
   Vec3Array reaction;                    ///< force the support exerts on each such node [N]
 
   std::vector<Index> forceNodes;         ///< nodes with a constant external point force

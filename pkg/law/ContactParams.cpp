@@ -14,6 +14,7 @@ void ContactParams::validate() const {
   require(flattenPasses >= 1, "flatten_passes", flattenPasses, "[1, inf)");
   require(std::isfinite(positionCorrection) && positionCorrection >= 0 && positionCorrection <= 1,
           "position_correction", positionCorrection, "[0, 1]");
+  require(std::isfinite(correctionSlop) && correctionSlop >= 0, "correction_slop", correctionSlop, "[0, inf) m");
   require(selfExclude >= 1, "self_exclude", selfExclude, "[1, inf) elements (1: CPs sharing a node)");
 }
 

@@ -18,6 +18,9 @@ struct ContactParams {
   /// (mass-weighted, momentum-free, booked to first order; docs/collisions.md). Box2D's 0.2:
   /// a whole overlap removed in one step kicks the springs.
   Real positionCorrection = 0.2;
+  /// Overlap left alone by the positional correction [m] >= 0 (Box2D's linear slop): below it, the
+  /// correction would only push against the contact force every step and the impulses take it back.
+  Real correctionSlop = 0.5e-6;
   /// CPs of one yarn this many elements apart or closer never collide (>= 1); raised per yarn to
   /// 1 + ceil(2 r0 / l0) (PairFilter).
   Index selfExclude = 1;

@@ -141,7 +141,7 @@ Real ImpulseLaw::correctPositions(Fabric& f, const std::vector<CPContact>& conta
   // The CPs whose length the correction can change: those of the nodes it moves.
   std::vector<Index> elems;
   for (const CPContact& c : contacts) {
-    if (!(c.gap < 0 && c.sectional)) continue;
+    if (!(c.gap < -p.correctionSlop && c.sectional)) continue;
     for (Index e : {c.cpA, c.cpB})
       for (Index k = std::max(e - 1, 0); k <= std::min(e + 1, f.nElems() - 1); ++k)
         if (f.elemYarn[k] == f.elemYarn[e]) elems.push_back(k);
@@ -152,13 +152,13 @@ Real ImpulseLaw::correctPositions(Fabric& f, const std::vector<CPContact>& conta
   Real before = 0, after = 0;
   for (Index e : elems) before += springEnergy(f, e);
   for (const CPContact& c : contacts) {
-    if (!(c.gap < 0 && c.sectional)) continue;
+    if (!(c.gap < -p.correctionSlop && c.sectional)) continue;
     Index node[4];
     Real w[4], K = 0;
     nodesAndWeights(f, c, node, w);
     for (int k = 0; k < 4; ++k) K += w[k] * w[k] * f.invMass[node[k]];
     if (!(K > 0)) continue;
-    const Vec3 d = (p.positionCorrection * -c.gap / K) * c.normal;  // relative shift along n = -gap * fraction
+    const Vec3 d = (p.positionCorrection * (-c.gap - p.correctionSlop) / K) * c.normal;  // relative shift along n
     // Each node moves across its own CP only: a shift along a yarn of stiffness E A / l0 stores
     // (1/2) K dx^2 at once (measured: 0.06 um per step on nearly parallel yarns put in three times the
     // drop's kinetic energy), while one across it stretches the CP only to second order.

@@ -37,7 +37,9 @@ from ._woven import (FabricEngine, Fabric, Pattern, YarnMaterial, YarnSection, W
                      InstabilityError, peirce_from_height, peirce_from_crimp, obb_contact, obb_first_contact)
 from .weave import weave, pattern, WEAVE_KEYS  # noqa: E402,F401
 from .engine import attach  # noqa: E402,F401
-from .arrays import positions, velocities, strains, tensions, masses, rest_lengths  # noqa: E402,F401
+from .arrays import (positions, velocities, strains, tensions, masses, rest_lengths,  # noqa: E402,F401
+                     section_flattening, section_semi_axes, contacts, candidate_pairs)
+from . import contact  # noqa: E402,F401
 from . import theory  # noqa: E402,F401
 
 __version__ = '0.1.0'
