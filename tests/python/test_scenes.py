@@ -56,3 +56,19 @@ def test_yade_batch_table(tmp_path):
     for tag, V in (('A', 150.0), ('B', 250.0)):
         s = json.load(open(tmp_path / tag / 'summary.json'))
         assert s['parameters']['V'] == V and s['status'] == 'ok'
+
+
+def test_tension_scene(tmp_path):
+    """4 x 4 yarns of KM2 706 pulled along the warp: the crimp comes out first (toe), then the
+    straightened warp yarns carry the load with their own stiffness n E A."""
+    rc, log, s = run_scene('tension.py', tmp_path, 'nx=2', 'ny=2', 'strain_end=0.0135', 'samples=60')
+    assert rc == 0, log
+    m, ref = s['measured'], s['reference']
+    assert 0.8 * ref['warp_crimp_built'] < m['toe_strain'] <= 1.05 * ref['warp_crimp_built']
+    assert m['final_stiffness'] == pytest.approx(ref['straight_yarns_stiffness'], rel=0.2)
+    assert abs(m['stiffness_ratio']) < 0.05  # the free weft does not resist decrimping
+    assert m['crossing_order_flips'] == 0 and m['crossings'] == 16
+    assert m['final_overlap'] < 0.01 * ref['yarn_thickness']
+    assert m['state_roundtrip_bitwise'] is True
+    for f in ('curve.csv', 'tension.png', 'pretensioned.state'):
+        assert os.path.exists(tmp_path / f)
