@@ -50,9 +50,10 @@ SectionLine sectionSurfaceAlong(const Fabric& f, Index e, const Vec3& p, const V
 
 bool cpContactStatic(const Fabric& f, const std::vector<OBB>& bounds, Index a, Index b, Real margin, SectionRule rule,
                      CPContact& out) {
-  const BoxContact c = obbContact(bounds[a], bounds[b], 0, kLateralCos);
+  const BoxContact c = obbContact(bounds[a], bounds[b], 0, kLateralCos, false);  // the point comes from the axes
   if (!c.overlap) return false;
-  fill(f, a, b, c, out);
+  out.cpA = a, out.cpB = b;
+  out.normal = c.normal;
   out.sectional = false;
   // The deepest place between two yarn pieces is where their axes come closest: measure there.
   const Vec3 &a0 = f.pos[f.elem0[a]], &a1 = f.pos[f.elem0[a] + 1], &b0 = f.pos[f.elem0[b]], &b1 = f.pos[f.elem0[b] + 1];

@@ -133,7 +133,7 @@ bool obbOverlap(const OBB& a, const OBB& b) {
   return true;
 }
 
-BoxContact obbContact(const OBB& a, const OBB& b, Real slop, Real lateralCos) {
+BoxContact obbContact(const OBB& a, const OBB& b, Real slop, Real lateralCos, bool points) {
   BoxContact out;
   const Frame f(a, b);
   Real bestDepth = INFINITY, lateralDepth = INFINITY;
@@ -146,9 +146,17 @@ BoxContact obbContact(const OBB& a, const OBB& b, Real slop, Real lateralCos) {
     const Real depth = (t.Rsum - t.R) / len;
     if (depth < bestDepth) bestDepth = depth, best = k;  // strict: faces (tested first) win ties
     if (lateralCos < 1 && depth < lateralDepth) {
-      const Vec3 L = axisVector(k, a, b) / len;
-      if (std::abs(L.dot(a.axis(0))) <= lateralCos && std::abs(L.dot(b.axis(0))) <= lateralCos)
-        lateralDepth = depth, lateral = k;
+      // |L.A0| and |L.B0| from C = A^T B: for L = A_i x B_j, L.A0 = (A0 x A_i).B_j and
+      // L.B0 = A_i.(B_j x B0), i.e. +-c of the other two axes (0 when i = 0, resp. j = 0).
+      Real la, lb;
+      if (k < 3) la = k == 0, lb = f.absC(k, 0);
+      else if (k < 6) la = f.absC(0, k - 3), lb = k == 3;
+      else {
+        const int i = (k - 6) / 3, j = (k - 6) % 3;
+        la = i == 0 ? 0 : f.absC(i == 1 ? 2 : 1, j) / len;
+        lb = j == 0 ? 0 : f.absC(i, j == 1 ? 2 : 1) / len;
+      }
+      if (la <= lateralCos && lb <= lateralCos) lateralDepth = depth, lateral = k;
     }
   }
   if (lateral >= 0) best = lateral, bestDepth = lateralDepth;
@@ -159,6 +167,7 @@ BoxContact obbContact(const OBB& a, const OBB& b, Real slop, Real lateralCos) {
   Vec3 n = axisVector(best, a, b).normalized();
   if (n.dot(D) < 0) n = -n;
   out.normal = n;
+  if (!points) return out;
   if (best < 3) {
     out.nPoints = faceContact(a, best, n, b, out.points.data(), true, slop);
   } else if (best < 6) {

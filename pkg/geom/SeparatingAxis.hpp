@@ -42,7 +42,8 @@ bool obbOverlap(const OBB& a, const OBB& b);
 /// With lateralCos < 1 the TD is the minimum over the axes L with |L.A0| <= lateralCos and
 /// |L.B0| <= lateralCos only (when there is one): for pieces of yarn, whose A0 runs along the yarn,
 /// this keeps the normal across both yarns; the yes/no answer still uses all 15 axes.
-BoxContact obbContact(const OBB& a, const OBB& b, Real slop = 0, Real lateralCos = 1);
+/// With points = false the contact points are not clipped (nPoints = 0): the TD alone.
+BoxContact obbContact(const OBB& a, const OBB& b, Real slop = 0, Real lateralCos = 1, bool points = true);
 
 /// Moving test: A and B translate at constant velocities va, vb [m/s] over [0, dt] [s] (no rotation
 /// within the step). `hit` when they meet in that interval; `time` is the first time of contact [s]
