@@ -88,9 +88,10 @@ def test_instability_stops_with_step_node_cause_and_keeps_last_good_state(yade_n
     path = tmp_path / 'last_good.state'
     e.save_state(str(path), last_good=True)
     raw = path.read_bytes()
+    assert raw[:8] == b'WOVENST2'  # int64 nodes, int64 step, double time, double last dt, positions, ...
     n, step = struct.unpack('<qq', raw[8:24])
     assert n == 51 and step % 3 == 0 and step < err.step
-    X = np.frombuffer(raw[32:32 + 51 * 24], dtype='<f8')
+    X = np.frombuffer(raw[40:40 + 51 * 24], dtype='<f8')
     assert np.all(np.isfinite(X))
     e.restore_last_good()
     assert np.array_equal(woven.positions(e).ravel(), X)
