@@ -181,6 +181,35 @@ TEST(ImpulseLaw, HeadOnPairElasticKeepsEnergyPlasticEndsTogether) {
   }
 }
 
+// Coulomb friction on one contact: the tangential impulse is bounded by mu times the normal one, so a
+// sliding pair loses mu |dvn| of tangential relative speed (both directions see the same effective
+// mass), and a pair with a large mu sticks (tangential relative velocity 0).
+TEST(ImpulseLaw, CoulombFrictionSlidesWithinTheConeAndSticksBeyond) {
+  for (Real mu : {0.1, 0.3, 10.0}) {
+    Fabric f = cpPair(2e-4);
+    f.vel[0] = f.vel[1] = Vec3(3, 0, 10);    // A sliding along x while approaching B
+    f.vel[2] = f.vel[3] = Vec3(0, 0, -10);
+    ContactParams p;
+    p.friction = mu;
+    CPContact c;
+    c.cpA = 0, c.cpB = 1, c.gap = 0, c.normal = Vec3::UnitZ(), c.sA = c.sB = 0.5;
+    auto rel = [&] { return Vec3(0.5 * (f.vel[2] + f.vel[3] - f.vel[0] - f.vel[1])); };
+    const Vec3 v0 = rel();
+    ImpulseLaw law;
+    ImpulseReport rep;
+    law.resolve(f, {c}, {0.0}, 1e-8, p, rep);
+    const Vec3 v1 = rel();
+    EXPECT_NEAR(v1.z(), 0, 1e-9);                   // normal approach stopped (e = 0)
+    const Real dvn = std::abs(v1.z() - v0.z()), slip0 = std::abs(v0.x()), slip1 = std::abs(v1.x());
+    if (mu * dvn < slip0) {
+      EXPECT_NEAR(slip0 - slip1, mu * dvn, 1e-9 * dvn) << "mu " << mu;  // sliding: |dJt| = mu |Jn|
+    } else {
+      EXPECT_NEAR(slip1, 0, 1e-9) << "mu " << mu;                       // sticking
+    }
+    EXPECT_LT(rep.energyChange, 0);
+  }
+}
+
 TEST(Flattening, CrossingRoundYarnsFlattenToTheGapAndLockAtTheMCD) {
   const Real r0 = 1e-4, l0 = 2e-4;
   for (SectionRule rule : {SectionRule::ConstantArea, SectionRule::Paper}) {
