@@ -132,7 +132,6 @@ void YarnTreeCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, c
     same = layout_[2 * y] == f.yarns[y].firstElem && layout_[2 * y + 1] == f.yarns[y].nElems;
   if (!same) build(f);
   refit(boxes);
-  ++stats.refits;
   pairs.clear();
 
   // Across yarns: sort the roots' world-axis-aligned extents along x and sweep (few yarns).

@@ -23,7 +23,6 @@ class YarnTreeCollider {
   void collide(const Fabric& f, const std::vector<OBB>& boxes, const PairFilter& filter, std::vector<CPPair>& pairs);
 
   struct Stats {
-    long refits = 0;         ///< collide() calls
     long rebuiltNodes = 0;   ///< internal nodes whose axes were rebuilt (all of them at the first call)
     long overlapTests = 0;   ///< box-box tests in the descents
   };

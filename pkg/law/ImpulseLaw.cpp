@@ -48,8 +48,6 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
   dt_ = dt;
   keepVelocities(f);
-  Vec3 p0 = Vec3::Zero();
-  for (Index i : touched_) p0 += (f.invMass[i] > 0 ? f.mass[i] : 0.0) * f.vel[i];
 
   rep.iterations = solve(f, p, p.friction > 0);
   for (const Row& r : rows_) {
@@ -58,10 +56,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     rep.residual = std::max(rep.residual, miss);
     rep.unresolved += miss > p.tolerance;
   }
-  Vec3 p1 = Vec3::Zero();
-  for (Index i : touched_) p1 += (f.invMass[i] > 0 ? f.mass[i] : 0.0) * f.vel[i];
   rep.energyChange = energyChange(f);
-  rep.impulseSum = p1 - p0;
 }
 
 void ImpulseLaw::keepVelocities(const Fabric& f) {

@@ -31,7 +31,6 @@ struct ImpulseReport {
   Real residual = 0;        ///< largest miss of a row's target after the last sweep [m/s]
   long unresolved = 0;      ///< rows still missing their target by more than the tolerance
   Real energyChange = 0;    ///< change of the step's kinetic energy (v_n) the impulses make [J]
-  Vec3 impulseSum = Vec3::Zero();  ///< sum of m dv over free nodes [N s] (0 up to rounding: momentum)
 };
 
 class ImpulseLaw {
