@@ -133,19 +133,23 @@ bool obbOverlap(const OBB& a, const OBB& b) {
   return true;
 }
 
-BoxContact obbContact(const OBB& a, const OBB& b, Real slop, Real lateralCos, bool points) {
-  BoxContact out;
-  const Frame f(a, b);
-  Real bestDepth = INFINITY, lateralDepth = INFINITY;
-  int best = -1, lateral = -1;
+namespace {
+// The 15 axes with early out; the TD is the minimum over all of them, or with Lateral over those at
+// least acos(lateralCos) away from both A0 and B0 (when there is one). Returns false if separated.
+template <bool Lateral>
+bool minimumAxis(const OBB& a, const OBB& b, const Frame& f, Real slop, Real lateralCos, int& best, Real& bestDepth) {
+  bestDepth = INFINITY;
+  best = -1;
+  Real lateralDepth = INFINITY;
+  int lateral = -1;
   for (int k = 0; k < 15; ++k) {
     const AxisTerms t = axisTerms(k, a, b, f);
     const Real len = k < 6 ? 1.0 : edgeLength(k, f);
-    if (t.R > t.Rsum + t.pad + slop * len) return out;  // separating axis: early out
-    if (len < kParallel) continue;                      // degenerate edge axis: no depth from it
+    if (t.R > t.Rsum + t.pad + slop * len) return false;  // separating axis: early out
+    if (len < kParallel) continue;                        // degenerate edge axis: no depth from it
     const Real depth = (t.Rsum - t.R) / len;
-    if (depth < bestDepth) bestDepth = depth, best = k;  // strict: faces (tested first) win ties
-    if (lateralCos < 1 && depth < lateralDepth) {
+    if (depth < bestDepth) bestDepth = depth, best = k;   // strict: faces (tested first) win ties
+    if (Lateral && depth < lateralDepth) {
       // |L.A0| and |L.B0| from C = A^T B: for L = A_i x B_j, L.A0 = (A0 x A_i).B_j and
       // L.B0 = A_i.(B_j x B0), i.e. +-c of the other two axes (0 when i = 0, resp. j = 0).
       Real la, lb;
@@ -159,7 +163,19 @@ BoxContact obbContact(const OBB& a, const OBB& b, Real slop, Real lateralCos, bo
       if (la <= lateralCos && lb <= lateralCos) lateralDepth = depth, lateral = k;
     }
   }
-  if (lateral >= 0) best = lateral, bestDepth = lateralDepth;
+  if (Lateral && lateral >= 0) best = lateral, bestDepth = lateralDepth;
+  return true;
+}
+}  // namespace
+
+BoxContact obbContact(const OBB& a, const OBB& b, Real slop, Real lateralCos, bool points) {
+  BoxContact out;
+  const Frame f(a, b);
+  int best;
+  Real bestDepth;
+  const bool touching = lateralCos < 1 ? minimumAxis<true>(a, b, f, slop, lateralCos, best, bestDepth)
+                                       : minimumAxis<false>(a, b, f, slop, lateralCos, best, bestDepth);
+  if (!touching) return out;
   out.overlap = true;
   out.axis = best;
   out.depth = bestDepth;
