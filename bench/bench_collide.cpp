@@ -1,9 +1,10 @@
 // Collision pipeline throughput on the tension scene (KM2 706, sections settled, warp ends pulled at
 // 1 m/s), single thread, in CP-steps per second:
 //   bench_collide [sizes = 10,30,100] [seconds per measurement = 3]
-// For each size (yarns per family): the whole step with collisions (tree broad phase), the same
-// with the sweep-and-prune broad phase, and the chain alone (no collisions) as the baseline, with
-// the collision stage's split (refit / broad / narrow / respond) and the ratios.
+// For each size (yarns per family): the whole step with collisions (tree broad phase, default skin),
+// the same with sweep and prune, and the chain alone (no collisions) as the baseline, with the
+// collision stage's split (refit / broad / narrow / respond) and the ratios; then the two broad
+// phases head to head with skin = 0 (a broad phase every step).
 #include "engine/FabricEngine.hpp"
 #include "weave/WeaveBuilder.hpp"
 #include <chrono>
@@ -38,10 +39,12 @@ std::unique_ptr<FabricEngine> scene(int yarns) {
   return e;
 }
 
-Run measure(int yarns, bool collisions, BroadPhase broad, double seconds) {
+Run measure(int yarns, bool collisions, BroadPhase broad, double seconds, Real skin = ContactParams().skin) {
   auto e = scene(yarns);
   if (collisions) {
-    e->enableCollisions(ContactParams(), broad);
+    ContactParams p;
+    p.skin = skin;
+    e->enableCollisions(p, broad);
     e->collisions()->settle(e->fabric());
   }
   const Real dt = 0.7 * e->criticalDt();
@@ -99,9 +102,13 @@ int main(int argc, char** argv) {
                 sap.cpStepsPerSecond / chain.cpStepsPerSecond);
     printSplit("tree", tree);
     printSplit("SAP", sap);
-    const double bt = tree.stats.seconds[1] / tree.steps, bs = sap.stats.seconds[1] / sap.steps;
-    std::printf("    broad phase: tree %.3g ms/step, SAP %.3g ms/step, tree / SAP time = %.3g\n", 1e3 * bt, 1e3 * bs,
-                bt / bs);
+    std::printf("    broad phases run: tree %ld in %ld steps, SAP %ld in %ld steps (skin %.3g m)\n", tree.stats.broadPhases,
+                tree.steps, sap.stats.broadPhases, sap.steps, ContactParams().skin);
+    const Run tree0 = measure(n, true, BroadPhase::YarnTree, seconds / 2, 0);
+    const Run sap0 = measure(n, true, BroadPhase::SweepAndPrune, seconds / 2, 0);
+    const double bt = tree0.stats.seconds[1] / tree0.steps, bs = sap0.stats.seconds[1] / sap0.steps;
+    std::printf("    broad phase every step (skin 0): tree %.3g ms, SAP %.3g ms, tree / SAP time = %.3g\n", 1e3 * bt,
+                1e3 * bs, bt / bs);
   }
   return 0;
 }

@@ -29,6 +29,7 @@ CollisionStage::CollisionStage(const ContactParams& p, BroadPhase broad) : broad
 void CollisionStage::setParams(const ContactParams& p) {
   p.validate();
   params_ = p;
+  pairsValid_ = false;
   filter_.selfExclude = p.selfExclude;
   filter_.yarnExclude.clear();  // configured again for the fabric at the next refit
 }
@@ -46,9 +47,29 @@ void CollisionStage::refit(Fabric& f, Real dt) {
   growBoxes(bounds_, grow_, grown_);
 }
 
+namespace {
+// Box a lies inside box b: on each of b's axes, a's projection lies within b's slab.
+bool inside(const OBB& a, const OBB& b) {
+  const Vec3 d = b.axes.transpose() * (a.centre - b.centre);
+  const Mat3 c = (b.axes.transpose() * a.axes).cwiseAbs();
+  return ((d.cwiseAbs() + c * a.extent).array() <= b.extent.array()).all();
+}
+}  // namespace
+
+// The candidate pairs of the last broad phase hold as long as every CP's box stays inside the box
+// that phase used (its box then, grown by the skin): a pair whose boxes overlap now overlapped then.
 void CollisionStage::broad(const Fabric& f) {
-  if (broadPhase == BroadPhase::YarnTree) tree.collide(f, grown_, filter_, pairs_);
-  else sap.collide(f, grown_, filter_, pairs_);
+  if (pairsValid_ && skinBoxes_.size() == grown_.size()) {
+    bool keep = true;
+    for (std::size_t e = 0; keep && e < grown_.size(); ++e) keep = inside(grown_[e], skinBoxes_[e]);
+    if (keep) return;
+  }
+  skinBoxes_ = grown_;
+  for (OBB& b : skinBoxes_) b.extent.array() += params_.skin;
+  if (broadPhase == BroadPhase::YarnTree) tree.collide(f, skinBoxes_, filter_, pairs_);
+  else sap.collide(f, skinBoxes_, filter_, pairs_);
+  pairsValid_ = true;
+  ++stats.broadPhases;
 }
 
 void CollisionStage::narrow(const Fabric& f, Real dt) {
@@ -145,6 +166,7 @@ Real CollisionStage::afterDrift(Fabric& f, Real) {
 Real CollisionStage::settle(Fabric& f, int maxPasses) {
   Real left = 0;
   for (int outer = 0; outer < maxPasses; ++outer) {
+    pairsValid_ = false;
     refit(f, 0);
     broad(f);
     narrow(f, 0);
@@ -157,6 +179,7 @@ Real CollisionStage::settle(Fabric& f, int maxPasses) {
 }
 
 Real CollisionStage::overlap(Fabric& f) {
+  pairsValid_ = false;
   refit(f, 0);
   broad(f);
   narrow(f, 0);

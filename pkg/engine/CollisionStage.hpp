@@ -22,6 +22,7 @@ BroadPhase broadPhaseByName(const std::string& name);
 struct CollisionStats {
   // last step
   long candidates = 0;        ///< pairs from the broad phase
+  long broadPhases = 0;       ///< broad phases run since the start (the rest of the steps reused the pairs)
   long contacts = 0;          ///< static + moving contacts
   long moving = 0;            ///< of which found by the moving test (not touching at the start)
   long flattened = 0;         ///< contacts whose overlap was (partly) taken up by flattening
@@ -81,7 +82,8 @@ class CollisionStage : public StepHook {
   ContactParams params_;
   PairFilter filter_;
   Vec3Array tangent_, dirSum_;
-  std::vector<OBB> bounds_, grown_;
+  std::vector<OBB> bounds_, grown_, skinBoxes_;  // skinBoxes_: grown_ + skin at the last broad phase
+  bool pairsValid_ = false;
   std::vector<Real> grow_, capacity_, flatBefore_;
   std::vector<CPPair> pairs_;
   std::vector<CPContact> contacts_;

@@ -9,6 +9,7 @@ void ContactParams::validate() const {
   require(std::isfinite(friction) && friction >= 0, "friction", friction, "[0, inf) (Coulomb coefficient)");
   require(std::isfinite(mcd) && mcd > 0 && mcd < 1, "mcd", mcd, "(0, 1) (maximum cross-sectional deformation)");
   require(std::isfinite(margin) && margin >= 0, "margin", margin, "[0, inf) m");
+  require(std::isfinite(skin) && skin >= 0, "skin", skin, "[0, inf) m");
   require(std::isfinite(tolerance) && tolerance > 0, "tolerance", tolerance, "(0, inf) m/s");
   require(maxIterations >= 1, "max_iterations", maxIterations, "[1, inf)");
   require(flattenPasses >= 1, "flatten_passes", flattenPasses, "[1, inf)");

@@ -11,6 +11,10 @@ struct ContactParams {
   Real mcd = 0.6;             ///< maximum cross-sectional deformation in (0, 1) (paper: 0.5-0.7)
   SectionRule rule = SectionRule::ConstantArea;
   Real margin = 1e-6;         ///< added to every side of a CP's OBB [m] >= 0: contacts start this close
+  /// Extra growth of the broad-phase boxes [m] >= 0 (a Verlet skin): the candidate pairs are kept
+  /// while every CP's box (grown by its motion in the step) stays inside its box of the last broad
+  /// phase; 0 runs the broad phase every step. The pairs found are the same either way.
+  Real skin = 5e-6;
   Real tolerance = 1e-6;      ///< Eq. 4 resting band and solver tolerance on normal velocity [m/s] > 0
   int maxIterations = 50;     ///< bound on the impulse iterations per step, >= 1
   int flattenPasses = 4;      ///< re-tests of flattened contacts per step (paper's "go to steps 1 and 2"), >= 1

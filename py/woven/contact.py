@@ -17,6 +17,7 @@ CONTACT_KEYS = {
     'correction_slop': (0.5e-6, 'm', 'overlap the positional correction leaves alone'),
     'self_exclude': (1, '', 'CPs of one yarn this many elements apart never collide (raised to the section size)'),
     'broad_phase': ('tree', '', "'tree' (OBB tree per yarn) or 'sap' (sweep and prune)"),
+    'skin': (5e-6, 'm', 'Verlet skin: candidate pairs are kept while every CP box stays inside its box grown by this'),
 }
 
 

@@ -403,3 +403,28 @@ TEST(StateIO, SectionsAndClockRoundTripAndTheRunContinuesBitForBit) {
   EXPECT_GT(maxFlat, 0.3);  // the sections were part of the state
   std::remove(path.c_str());
 }
+
+// The Verlet skin only decides how often the broad phase runs: the contacts, and so the whole run,
+// are the same bit for bit as with a broad phase every step.
+TEST(Collider, SkinChangesNothingButHowOftenTheBroadPhaseRuns) {
+  WeaveParams p = km2_706();
+  p.nx = p.ny = 2;
+  Vec3Array pos[2];
+  long broadPhases[2];
+  for (int k = 0; k < 2; ++k) {
+    FabricEngine e(buildWeave(p).fabric);
+    ContactParams c;
+    c.skin = k == 0 ? 0.0 : 20e-6;
+    e.enableCollisions(c);
+    e.collisions()->settle(e.fabric());
+    for (const Yarn& y : e.fabric().yarns)
+      if (y.family == YarnFamily::Warp) e.dynamics().prescribeVelocity(y.firstNode + y.nNodes - 1, Vec3(5, 0, 0));
+    const Real dt = 0.7 * e.criticalDt();
+    for (int s = 0; s < 400; ++s) e.step(dt);
+    pos[k] = e.fabric().pos;
+    broadPhases[k] = e.collisions()->stats.broadPhases;
+  }
+  EXPECT_EQ(std::memcmp(pos[0].data(), pos[1].data(), pos[0].size() * sizeof(Vec3)), 0);
+  EXPECT_GE(broadPhases[0], 400);  // every step (and the settling passes)
+  EXPECT_LT(broadPhases[1], 100);
+}
