@@ -27,7 +27,7 @@ SectionLine sectionSurfaceAlong(const Fabric& f, Index e, const Vec3& p, const V
   const Real sRaw = (p - f.pos[i]).dot(axis) / axis.squaredNorm();
   if (sRaw < -0.1 || sRaw > 1.1) return SectionLine::Beside;
   const Real s = std::min(Real(1), std::max(Real(0), sRaw));
-  const Vec3 t = (f.pos[j] - f.pos[i]).normalized();
+  const Vec3 t = axis.normalized();
   const Vec3 c = (1 - s) * f.pos[i] + s * f.pos[j];
   const Vec3& dj = f.secDir[j];
   Vec3 d = (1 - s) * f.secDir[i] + s * (f.secDir[i].dot(dj) < 0 ? Vec3(-dj) : dj);
