@@ -142,8 +142,10 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   stats.penetration = 0;
   for (std::size_t k = 0; k < contacts_.size(); ++k) {
     const CPContact& c = contacts_[k];
-    capacity_[k] = flatteningCapacity(f, tangent_, c.cpA, c.normal, params_) +
-                   flatteningCapacity(f, tangent_, c.cpB, c.normal, params_);
+    // still overlapping after the passes: the law gives it no room, so its capacity is not needed
+    capacity_[k] = c.gap < 0 ? 0.0
+                             : flatteningCapacity(f, tangent_, c.cpA, c.normal, params_) +
+                                   flatteningCapacity(f, tangent_, c.cpB, c.normal, params_);
     stats.penetration = std::max(stats.penetration, -c.gap);
   }
   law_.resolve(f, contacts_, capacity_, dt, params_, stats.impulses);
