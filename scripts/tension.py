@@ -1,5 +1,5 @@
 # Tension of a free crimped plain weave into a woven state (paper Sec. 6.1), run inside YADE's loop.
-#   yade -n -x scripts/tension.py [nx=5] [ny=5] [mode=uniaxial] [velocity=1] [strain_end=0.014] [out=DIR] ...
+#   yade -n -x scripts/tension.py [nx=5] [ny=5] [mode=uniaxial] [velocity=1] [strain_end=crimp+0.3%] [out=DIR] ...
 # The weave (default KM2 style 706, 5 x 5 repeats = 10 x 10 yarns) starts with circular sections;
 # they are flattened where the crossings need it (settle_sections), then the warp ends at x_min are
 # held and those at x_max pulled along +x at `velocity` (reached over the first `ramp` of the run);
@@ -28,7 +28,8 @@ defaults.update(CONTACT_KEYS)
 defaults.update({
     'mode': ('uniaxial', '', "'uniaxial' (warp ends pulled, weft free) or 'biaxial' (both families pulled)"),
     'velocity': (1.0, 'm/s', 'grip speed'),
-    'strain_end': (0.014, '', 'nominal strain (grip displacement / grip distance) at the end of the run'),
+    'strain_end': (-1.0, '', 'nominal strain (grip displacement / grip distance) at the end of the run; '
+                             '< 0: the built warp crimp + 0.3 % (the straight part, before the edge weft folds)'),
     'ramp': (0.1, '', 'fraction of the run over which the grip speed rises from 0'),
     'safety': (0.7, '', 'O.dt = safety * dt_crit'),
     'samples': (150, '', 'rows of curve.csv'),
@@ -40,10 +41,12 @@ defaults.update({
 p = read_params(defaults)
 if p.mode not in ('uniaxial', 'biaxial'):
     raise ValueError("mode = %r is invalid: allowed 'uniaxial' or 'biaxial'" % p.mode)
-for k, lo, hi in (('velocity', 0, 100), ('strain_end', 0, 0.2), ('ramp', 0, 1), ('safety', 0, 1),
+for k, lo, hi in (('velocity', 0, 100), ('ramp', 0, 1), ('safety', 0, 1),
                   ('final_fit', 0, 1), ('initial_fit', 0, 1), ('penetration_limit', 0, 1)):
     if not (lo < p[k] <= hi) and not (k == 'ramp' and p[k] == 0):
         raise ValueError('%s = %r is invalid: allowed (%g, %g] %s' % (k, p[k], lo, hi, p.units[k]))
+if not (p.strain_end < 0 or 0 < p.strain_end <= 0.2):
+    raise ValueError('strain_end = %r is invalid: allowed (0, 0.2], or < 0 for the built warp crimp + 0.3 %%' % p.strain_end)
 if p.samples < 10:
     raise ValueError('samples = %r is invalid: allowed [10, inf)' % p.samples)
 d = out_dir('tension', p)
@@ -61,6 +64,7 @@ def build():
 
 w, settle_left = build()
 eng = w.engine
+strain_end = p.strain_end if p.strain_end > 0 else w.summary['warp_crimp_built'] + 0.003
 X0 = woven.positions(eng).copy()
 warp_first = [eng.yarn(y)['first_node'] for y in w.warp_yarns]
 warp_last = [eng.yarn(y)['first_node'] + eng.yarn(y)['n_nodes'] - 1 for y in w.warp_yarns]
@@ -76,8 +80,8 @@ if p.mode == 'biaxial':
     for i in weft_last:
         eng.prescribe_velocity(i, Vector3(0, p.velocity, 0))
 L = float(np.mean(X0[warp_last, 0]) - np.mean(X0[warp_first, 0]))  # grip distance [m]
-t_run = p.strain_end * L / p.velocity + 0.5 * p.ramp * p.strain_end * L / p.velocity  # the ramp loses half its span
-eng.velocity_ramp = p.ramp * p.strain_end * L / p.velocity
+t_run = strain_end * L / p.velocity + 0.5 * p.ramp * strain_end * L / p.velocity  # the ramp loses half its span
+eng.velocity_ramp = p.ramp * strain_end * L / p.velocity
 
 O.engines = []
 woven.attach(eng, set_dt=True, safety=p.safety)
@@ -157,7 +161,7 @@ X_end = woven.positions(eng).copy()
 flips, crossings = crossing_order(X0, X_end)
 final_overlap = eng.overlap()
 
-measured = {'steps': O.iter, 'grip_distance': L, 'settle_overlap': settle_left, 'final_overlap': final_overlap,
+measured = {'steps': O.iter, 'strain_end': strain_end, 'grip_distance': L, 'settle_overlap': settle_left, 'final_overlap': final_overlap,
             'max_transient_penetration': stats.get('max_penetration', 0.0), 'crossings': crossings,
             'crossing_order_flips': flips, 'max_unresolved_impulse_rows': stats.get('max_unresolved', 0),
             'collision_seconds': {k[8:]: stats[k] for k in stats if k.startswith('seconds_')}}

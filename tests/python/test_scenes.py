@@ -58,16 +58,18 @@ def test_yade_batch_table(tmp_path):
         assert s['parameters']['V'] == V and s['status'] == 'ok'
 
 
-def test_tension_scene(tmp_path):
-    """4 x 4 yarns of KM2 706 pulled along the warp: the crimp comes out first (toe), then the
-    straightened warp yarns carry the load with their own stiffness n E A."""
-    rc, log, s = run_scene('tension.py', tmp_path, 'nx=2', 'ny=2', 'strain_end=0.0135', 'samples=60')
+@pytest.mark.parametrize('pattern, n, crossings', [('plain', 2, 16), ('satin', 1, 25)])
+def test_tension_scene(tmp_path, pattern, n, crossings):
+    """KM2 706 pulled along the warp (4 x 4 yarns plain, 5 x 5 satin with its floats): the crimp
+    comes out first (toe), then the straightened warp yarns carry the load with their own n E A."""
+    rc, log, s = run_scene('tension.py', tmp_path, 'pattern=%s' % pattern, 'nx=%d' % n, 'ny=%d' % n, 'samples=60')
     assert rc == 0, log
     m, ref = s['measured'], s['reference']
+    assert m['strain_end'] == pytest.approx(ref['warp_crimp_built'] + 0.003)
     assert 0.8 * ref['warp_crimp_built'] < m['toe_strain'] <= 1.05 * ref['warp_crimp_built']
     assert m['final_stiffness'] == pytest.approx(ref['straight_yarns_stiffness'], rel=0.2)
     assert abs(m['stiffness_ratio']) < 0.05  # the free weft does not resist decrimping
-    assert m['crossing_order_flips'] == 0 and m['crossings'] == 16
+    assert m['crossing_order_flips'] == 0 and m['crossings'] == crossings
     assert m['final_overlap'] < 0.01 * ref['yarn_thickness']
     assert m['state_roundtrip_bitwise'] is True
     for f in ('curve.csv', 'tension.png', 'pretensioned.state'):
