@@ -21,8 +21,7 @@ BroadPhase broadPhaseByName(const std::string& name);
 
 struct CollisionStats {
   // last step
-  long candidates = 0;        ///< pairs from the broad phase
-  long broadPhases = 0;       ///< broad phases run since the start (the rest of the steps reused the pairs)
+  long candidates = 0;        ///< candidate pairs (of the last broad phase, which later steps may reuse)
   long contacts = 0;          ///< static + moving contacts
   long moving = 0;            ///< of which found by the moving test (not touching at the start)
   long flattened = 0;         ///< contacts whose overlap was (partly) taken up by flattening
@@ -32,6 +31,7 @@ struct CollisionStats {
   Real correctionEnergy = 0;  ///< spring energy the positional correction put in [J]
   // since the start
   long steps = 0;
+  long broadPhases = 0;       ///< broad phases run (the other steps reused the pairs: Verlet skin)
   Real maxPenetration = 0;    ///< [m]
   long maxUnresolved = 0;     ///< most unresolved impulse rows in one step
   Real maxResidual = 0;       ///< [m/s]
@@ -65,8 +65,8 @@ class CollisionStage : public StepHook {
   const std::vector<CPContact>& contacts() const { return contacts_; }
   const std::vector<OBB>& bounds() const { return bounds_; }
   const std::vector<CPPair>& candidates() const { return pairs_; }
-  /// Refits the bounds and lists the candidate pairs with both broad phases at the current state
-  /// (dt = 0): for tests and benchmarks.
+  /// Refits the bounds and lists the candidate pairs of the given broad phase at the current state
+  /// (dt = 0, no skin; the stage's own pairs are untouched): for tests and benchmarks.
   void candidatePairs(Fabric& f, BroadPhase which, std::vector<CPPair>& out);
 
   CollisionStats stats;

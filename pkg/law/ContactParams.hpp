@@ -19,8 +19,8 @@ struct ContactParams {
   int maxIterations = 50;     ///< bound on the impulse iterations per step, >= 1
   int flattenPasses = 4;      ///< re-tests of flattened contacts per step (paper's "go to steps 1 and 2"), >= 1
   /// Fraction in [0, 1] of a residual (locked) overlap removed per step by moving the nodes apart
-  /// (mass-weighted, momentum-free, booked to first order; docs/collisions.md). Box2D's 0.2:
-  /// a whole overlap removed in one step kicks the springs.
+  /// (weighted like an impulse, each node across its own CP; its spring energy is booked;
+  /// docs/collisions.md). Box2D's 0.2: a whole overlap removed in one step kicks the springs.
   Real positionCorrection = 0.2;
   /// Overlap left alone by the positional correction [m] >= 0 (Box2D's linear slop): below it, the
   /// correction would only push against the contact force every step and the impulses take it back.
