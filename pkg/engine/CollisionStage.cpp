@@ -138,17 +138,15 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   for (const CPContact& c : contacts_) stats.moving += c.time > 0;
   stats.flattened = 0;
   stats.flattenPasses = flatten(f, params_.flattenPasses);
-  capacity_.resize(contacts_.size());
   stats.penetration = 0;
-  for (std::size_t k = 0; k < contacts_.size(); ++k) {
-    const CPContact& c = contacts_[k];
-    // still overlapping after the passes: the law gives it no room, so its capacity is not needed
-    capacity_[k] = c.gap < 0 ? 0.0
-                             : flatteningCapacity(f, tangent_, c.cpA, c.normal, params_) +
-                                   flatteningCapacity(f, tangent_, c.cpB, c.normal, params_);
-    stats.penetration = std::max(stats.penetration, -c.gap);
-  }
-  law_.resolve(f, contacts_, capacity_, dt, params_, stats.impulses);
+  for (const CPContact& c : contacts_) stats.penetration = std::max(stats.penetration, -c.gap);
+  law_.resolve(
+      f, contacts_,
+      [&](const CPContact& c) {
+        return flatteningCapacity(f, tangent_, c.cpA, c.normal, params_) +
+               flatteningCapacity(f, tangent_, c.cpB, c.normal, params_);
+      },
+      dt, params_, stats.impulses);
   stats.correctionEnergy = ImpulseLaw::correctPositions(f, contacts_, params_);
   stats.seconds[3] += since(t);
 

@@ -84,7 +84,7 @@ class CollisionStage : public StepHook {
   Vec3Array tangent_, dirSum_;
   std::vector<OBB> bounds_, grown_, skinBoxes_;  // skinBoxes_: grown_ + skin at the last broad phase
   bool pairsValid_ = false;
-  std::vector<Real> grow_, capacity_, flatBefore_;
+  std::vector<Real> grow_, flatBefore_;
   std::vector<CPPair> pairs_;
   std::vector<CPContact> contacts_;
   std::vector<std::uint8_t> dirty_;

@@ -18,7 +18,7 @@ inline void applyImpulse(Fabric& f, const Index node[4], const Real w[4], const 
 }
 }  // namespace
 
-void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, const std::vector<Real>& capacity, Real dt,
+void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, const Capacity& capacity, Real dt,
                          const ContactParams& p, ImpulseReport& rep) {
   rep = ImpulseReport{};
   rows_.clear();
@@ -30,8 +30,9 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     // Approach the room absorbs: the gap, and what flattening can still take, unless the contact is
     // still overlapping after the flattening passes (flattening has stopped working for it).
     const Real gap = contacts[c].gap;
-    const Real allowed = (gap < 0 ? 0.0 : gap + capacity[c]) / dt;
-    if (!(r.vn0 < -allowed - p.tolerance)) continue;  // separating, resting, or taken up by flattening (Eq. 4)
+    if (!(r.vn0 < -std::max(gap, Real(0)) / dt - p.tolerance)) continue;  // separating, resting (Eq. 4), or within the gap
+    const Real allowed = (gap < 0 ? 0.0 : gap + capacity(contacts[c])) / dt;
+    if (!(r.vn0 < -allowed - p.tolerance)) continue;  // taken up by flattening
     Real K = 0;
     for (int k = 0; k < 4; ++k) K += r.w[k] * r.w[k] * f.invMass[r.node[k]];
     if (!(K > 0)) continue;  // both CPs kinematic

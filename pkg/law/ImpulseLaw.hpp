@@ -21,6 +21,7 @@
 #include "fabric/Fabric.hpp"
 #include "geom/CPContact.hpp"
 #include "law/ContactParams.hpp"
+#include <functional>
 #include <vector>
 
 namespace woven {
@@ -35,9 +36,12 @@ struct ImpulseReport {
 
 class ImpulseLaw {
  public:
-  /// Applies the impulses to Fabric::vel. capacity[c] is contact c's remaining flattening capacity
-  /// along its normal (both CPs) [m]; dt [s] the step.
-  void resolve(Fabric& f, const std::vector<CPContact>& contacts, const std::vector<Real>& capacity, Real dt,
+  /// What flattening can still take along a contact's normal (both CPs) [m]; asked only for contacts
+  /// that approach faster than their gap alone allows.
+  using Capacity = std::function<Real(const CPContact&)>;
+
+  /// Applies the impulses to Fabric::vel; dt [s] the step.
+  void resolve(Fabric& f, const std::vector<CPContact>& contacts, const Capacity& capacity, Real dt,
                const ContactParams& p, ImpulseReport& report);
 
   /// Pass 2 after the drift: restitution e of the rows of the last resolve() (see above). Returns

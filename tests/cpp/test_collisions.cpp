@@ -17,6 +17,9 @@ using namespace woven_test;
 
 namespace {
 
+// Flattening capacity of a locked contact.
+Real locked(const CPContact&) { return 0.0; }
+
 YarnSection roundSection(Real r) {
   YarnSection s;
   s.width = s.thickness = 2 * r;
@@ -135,7 +138,7 @@ TEST(ImpulseLaw, EachImpulseConservesMomentum) {
     Real scale = 0;
     for (Index i = 0; i < f.nNodes(); ++i) scale += f.mass[i] * f.vel[i].norm();
     ImpulseReport rep;
-    law.resolve(f, {c}, {0.0}, 1e-8, p, rep);
+    law.resolve(f, {c}, locked, 1e-8, p, rep);
     EXPECT_LE((momentum(f) - p0).norm(), 1e-12 * scale);
     const Real dE = rep.energyChange + law.restitute(f, p);
     EXPECT_LE((momentum(f) - p0).norm(), 1e-12 * scale);
@@ -166,7 +169,7 @@ TEST(ImpulseLaw, HeadOnPairElasticKeepsEnergyPlasticEndsTogether) {
       const Real vn0 = vn();
       ImpulseLaw law;
       ImpulseReport rep;
-      law.resolve(f, {c}, {0.0}, 1e-8, p, rep);  // pass 1: stop the approach
+      law.resolve(f, {c}, locked, 1e-8, p, rep);  // pass 1: stop the approach
       law.restitute(f, p);                         // pass 2: give back e of it (Eq. 5 in total)
       ASSERT_EQ(rep.rows, 1);
       EXPECT_EQ(rep.unresolved, 0);
@@ -197,7 +200,7 @@ TEST(ImpulseLaw, CoulombFrictionSlidesWithinTheConeAndSticksBeyond) {
     const Vec3 v0 = rel();
     ImpulseLaw law;
     ImpulseReport rep;
-    law.resolve(f, {c}, {0.0}, 1e-8, p, rep);
+    law.resolve(f, {c}, locked, 1e-8, p, rep);
     const Vec3 v1 = rel();
     EXPECT_NEAR(v1.z(), 0, 1e-9);                   // normal approach stopped (e = 0)
     const Real dvn = std::abs(v1.z() - v0.z()), slip0 = std::abs(v0.x()), slip1 = std::abs(v1.x());
