@@ -2,7 +2,8 @@
 // 1 m/s), single thread, in CP-steps per second:
 //   bench_collide [sizes = 10,30,100] [seconds per measurement = 3]
 // For each size (yarns per family): the whole step with collisions (tree broad phase, default skin),
-// the same with sweep and prune, and the chain alone (no collisions) as the baseline, with the
+// the same with sweep and prune, the tree with 2 narrow-phase threads, and the chain alone (no
+// collisions) as the baseline, with the
 // collision stage's split (refit / broad / narrow / respond) and the ratios; then the two broad
 // phases head to head with skin = 0 (a broad phase every step).
 #include "engine/FabricEngine.hpp"
@@ -39,11 +40,13 @@ std::unique_ptr<FabricEngine> scene(int yarns) {
   return e;
 }
 
-Run measure(int yarns, bool collisions, BroadPhase broad, double seconds, Real skin = ContactParams().skin) {
+Run measure(int yarns, bool collisions, BroadPhase broad, double seconds, Real skin = ContactParams().skin,
+            int threads = 1) {
   auto e = scene(yarns);
   if (collisions) {
     ContactParams p;
     p.skin = skin;
+    p.threads = threads;
     e->enableCollisions(p, broad);
     e->collisions()->settle(e->fabric());
   }
@@ -100,6 +103,9 @@ int main(int argc, char** argv) {
                 tree.cpStepsPerSecond / chain.cpStepsPerSecond);
     std::printf("    collisions, SAP     %10.3g CP-steps/s  (%.3g x the chain alone)\n", sap.cpStepsPerSecond,
                 sap.cpStepsPerSecond / chain.cpStepsPerSecond);
+    const Run tree2 = measure(n, true, BroadPhase::YarnTree, seconds, ContactParams().skin, 2);
+    std::printf("    collisions, tree, 2 narrow-phase threads %10.3g CP-steps/s  (%.3g x one thread)\n",
+                tree2.cpStepsPerSecond, tree2.cpStepsPerSecond / tree.cpStepsPerSecond);
     printSplit("tree", tree);
     printSplit("SAP", sap);
     std::printf("    broad phases run: tree %ld in %ld steps, SAP %ld in %ld steps (skin %.3g m)\n", tree.stats.broadPhases,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <thread>
 
 namespace woven {
 
@@ -73,13 +74,28 @@ void CollisionStage::broad(const Fabric& f) {
 }
 
 void CollisionStage::narrow(const Fabric& f, Real dt) {
+  // Contiguous slices of the sorted pairs, one per thread, concatenated in order: the same contacts
+  // in the same order for any thread count.
+  const std::size_t n = pairs_.size();
+  const int threads = n >= 4096 ? params_.threads : 1;  // below that a thread costs more than it saves
+  slices_.resize(threads);
+  auto work = [&](int t) {
+    std::vector<CPContact>& out = slices_[t];
+    out.clear();
+    CPContact c;
+    for (std::size_t k = n * t / threads; k < n * (t + 1) / threads; ++k) {
+      const CPPair& pr = pairs_[k];
+      if (cpContactStatic(f, bounds_, pr.a, pr.b, params_.margin, params_.rule, c) ||
+          (dt > 0 && cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c)))
+        out.push_back(c);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
+  work(0);
+  for (std::thread& th : pool) th.join();
   contacts_.clear();
-  CPContact c;
-  for (const CPPair& pr : pairs_) {
-    if (cpContactStatic(f, bounds_, pr.a, pr.b, params_.margin, params_.rule, c) ||
-        (dt > 0 && cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c)))
-      contacts_.push_back(c);
-  }
+  for (const auto& s : slices_) contacts_.insert(contacts_.end(), s.begin(), s.end());
 }
 
 // Paper Sec. 5.1 steps 1-3: take up each overlap by flattening the sections of both CPs (half each,

@@ -87,6 +87,7 @@ class CollisionStage : public StepHook {
   std::vector<Real> grow_, flatBefore_;
   std::vector<CPPair> pairs_;
   std::vector<CPContact> contacts_;
+  std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per thread
   std::vector<std::uint8_t> dirty_;
   ImpulseLaw law_;
 };

@@ -18,6 +18,7 @@ CONTACT_KEYS = {
     'self_exclude': (1, '', 'CPs of one yarn this many elements apart never collide (raised to the section size)'),
     'broad_phase': ('tree', '', "'tree' (OBB tree per yarn) or 'sap' (sweep and prune)"),
     'skin': (5e-6, 'm', 'Verlet skin: candidate pairs are kept while every CP box stays inside its box grown by this'),
+    'threads': (1, '', 'threads of the narrow phase (same contacts, bit for bit, for any count)'),
 }
 
 
@@ -27,7 +28,7 @@ def enable(engine, **kw):
     if bad:
         raise ValueError('unknown contact key(s) %s: allowed %s' % (', '.join(bad), ', '.join(sorted(CONTACT_KEYS))))
     args = {k: kw.get(k, v[0]) for k, v in CONTACT_KEYS.items()}
-    for k in ('max_iterations', 'flatten_passes', 'self_exclude'):
+    for k in ('max_iterations', 'flatten_passes', 'self_exclude', 'threads'):
         args[k] = int(args[k])
     engine.enable_collisions(**args)
     return engine
