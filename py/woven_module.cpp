@@ -106,6 +106,7 @@ bp::dict energyDict(FabricEngine& e) {
   bp::dict d;
   d["kinetic"] = b.kinetic, d["elastic"] = b.elastic, d["damped"] = b.damped, d["work"] = b.work;
   d["initial"] = b.initial, d["contact"] = b.contact, d["contact_input"] = b.contactInput;
+  d["released"] = b.released, d["body_work"] = b.bodyWork;
   d["balance_error"] = b.balanceError();
   return d;
 }
@@ -150,12 +151,13 @@ bool isKinematic(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.d
 // --- collisions ---
 void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real mcd, const std::string& rule, Real margin,
                         Real tolerance, int maxIterations, int flattenPasses, Real positionCorrection,
-                        Real correctionSlop, Index selfExclude, const std::string& broad, Real skin, int threads) {
+                        Real correctionSlop, Index selfExclude, const std::string& broad, Real skin, int threads,
+                        bool yarnContacts) {
   ContactParams p;
   p.restitution = restitution, p.friction = friction, p.mcd = mcd, p.rule = sectionRuleByName(rule);
   p.margin = margin, p.tolerance = tolerance, p.maxIterations = maxIterations, p.flattenPasses = flattenPasses;
   p.positionCorrection = positionCorrection, p.correctionSlop = correctionSlop, p.selfExclude = selfExclude;
-  p.skin = skin, p.threads = threads;
+  p.skin = skin, p.threads = threads, p.yarnContacts = yarnContacts;
   e.enableCollisions(p, broadPhaseByName(broad));
 }
 CollisionStage& stageOf(FabricEngine& e) {
@@ -175,7 +177,110 @@ bp::dict collisionStats(FabricEngine& e) {
   d["seconds_refit"] = s.seconds[0], d["seconds_broad"] = s.seconds[1];
   d["seconds_narrow"] = s.seconds[2], d["seconds_respond"] = s.seconds[3];
   d["tree_rebuilt_nodes"] = stageOf(e).tree.stats.rebuiltNodes;
+  d["body_contacts"] = s.bodyContacts, d["body_penetration"] = s.bodyPenetration;
+  d["max_body_penetration"] = s.maxBodyPenetration, d["body_lists"] = stageOf(e).bodyCollider.rebuilds;
   return d;
+}
+
+// --- breakage ---
+void enableBreakage(FabricEngine& e, Real strain, Real filterLength, Real weibull, long seed) {
+  require(seed >= 0, "seed", seed, "[0, 2^63)");
+  BreakageParams p;
+  p.enabled = true, p.threshold = strain, p.filterLength = filterLength, p.weibullModulus = weibull;
+  p.seed = static_cast<std::uint64_t>(seed);
+  e.dynamics().configureBreakage(p);
+}
+bp::list breakLog(FabricEngine& e) {
+  bp::list out;
+  for (const BreakEvent& b : e.dynamics().breakage().log()) {
+    bp::dict d;
+    d["step"] = b.step, d["time"] = b.time, d["yarn"] = b.yarn, d["element"] = b.element;
+    d["position"] = b.position, d["strain"] = b.strain, d["raw_strain"] = b.rawStrain, d["energy"] = b.energy;
+    out.append(d);
+  }
+  return out;
+}
+
+// --- rigid bodies (YADE's projectile, clamps) ---
+CollisionStage& bodyStage(FabricEngine& e) {
+  if (!e.collisions())
+    throw ParameterError("collisions", "off", "on: rigid bodies collide through the collision stage (enable_collisions)");
+  return *e.collisions();
+}
+RigidBody& bodyAt(FabricEngine& e, int k) {
+  auto& b = bodyStage(e).bodies;
+  require(k >= 0 && k < static_cast<int>(b.size()), "body", k, "[0, " + fmt(static_cast<long>(b.size()) - 1) + "]");
+  return b[k];
+}
+// parts: list of ('box', half_extents Vector3, offset Vector3, Quaternion) or ('sphere', radius, offset, Quaternion)
+int addBody(FabricEngine& e, long id, bp::object parts, Real mass, const Vec3& inertia, const Vec3& pos, const Quat& ori,
+            const Vec3& vel, const Vec3& angVel) {
+  RigidBody b;
+  b.id = id, b.mass = mass, b.inertia = inertia, b.pos = pos, b.ori = ori, b.vel = vel, b.angVel = angVel;
+  for (bp::stl_input_iterator<bp::object> it(parts), end; it != end; ++it) {
+    bp::object t = *it;
+    RigidPart p;
+    const std::string kind = bp::extract<std::string>(t[0]);
+    if (kind == "box") p.type = RigidPart::Type::Box, p.halfSize = bp::extract<Vec3>(t[1]);
+    else if (kind == "sphere") p.type = RigidPart::Type::Sphere, p.radius = bp::extract<Real>(t[1]);
+    else throw ParameterError("parts", "'" + kind + "'", "'box' or 'sphere' parts");
+    p.offset = bp::extract<Vec3>(t[2]);
+    p.ori = bp::extract<Quat>(t[3]);
+    b.parts.push_back(p);
+  }
+  b.validate();
+  bodyStage(e).bodies.push_back(b);
+  return static_cast<int>(bodyStage(e).bodies.size()) - 1;
+}
+bp::dict bodyDict(FabricEngine& e, int k) {
+  const RigidBody& b = bodyAt(e, k);
+  bp::dict d;
+  d["id"] = b.id, d["mass"] = b.mass, d["inertia"] = b.inertia, d["pos"] = b.pos, d["ori"] = b.ori;
+  d["vel"] = b.vel, d["ang_vel"] = b.angVel, d["kinetic_energy"] = b.kineticEnergy(), d["parts"] = b.parts.size();
+  return d;
+}
+void setBodyState(FabricEngine& e, int k, const Vec3& pos, const Quat& ori, const Vec3& vel, const Vec3& angVel) {
+  RigidBody& b = bodyAt(e, k);
+  RigidBody c = b;
+  c.pos = pos, c.ori = ori, c.vel = vel, c.angVel = angVel;
+  c.validate();  // nothing changes on bad input
+  b = c;
+}
+// One step coupled with YADE: each body's state is read from O.bodies[id].state; with `rewind`
+// (NewtonIntegrator ran before this engine in the same iteration, so YADE already moved the body
+// from x_n to x_n + dt v) the pose is taken back to x_n; the fabric steps with the bodies; their new
+// pose and velocities are written back. A few attribute reads and writes per body, none per node.
+void yadeStep(FabricEngine& e, Real dt, bp::object yadeBodies, bool rewind) {
+  CollisionStage* st = e.collisions();
+  std::vector<bp::object> states;
+  if (st) {
+    for (RigidBody& b : st->bodies) {
+      bp::object s = yadeBodies[b.id].attr("state");
+      states.push_back(s);
+      Vec3 pos = bp::extract<Vec3>(s.attr("pos"));
+      Quat ori = bp::extract<Quat>(s.attr("ori"));
+      const Vec3 vel = bp::extract<Vec3>(s.attr("vel"));
+      const Vec3 w = bp::extract<Vec3>(s.attr("angVel"));
+      if (rewind) {
+        pos -= dt * vel;
+        const Real angle = w.norm() * dt;
+        if (angle > 0) ori = (Quat(Eigen::AngleAxis<Real>(-angle, w.normalized())) * ori).normalized();
+      }
+      b.pos = pos, b.ori = ori, b.vel = vel, b.angVel = w;
+    }
+  }
+  e.step(dt);
+  if (st) {
+    for (std::size_t k = 0; k < st->bodies.size(); ++k) {
+      const RigidBody& b = st->bodies[k];
+      if (!b.dynamic()) continue;  // YADE moves kinematic bodies itself
+      bp::object s = states[k];
+      s.attr("pos") = b.pos;
+      s.attr("ori") = b.ori;
+      s.attr("vel") = b.vel;
+      s.attr("angVel") = b.angVel;
+    }
+  }
 }
 bp::object candidatePairsPy(FabricEngine& e, const std::string& broad) {
   std::vector<CPPair> pairs;
@@ -367,11 +472,12 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("section_rule") = "constant_area", bp::arg("margin") = 1e-6, bp::arg("tolerance") = 1e-6,
             bp::arg("max_iterations") = 50, bp::arg("flatten_passes") = 4, bp::arg("position_correction") = 0.2,
             bp::arg("correction_slop") = 0.5e-6, bp::arg("self_exclude") = 1, bp::arg("broad_phase") = "tree",
-            bp::arg("skin") = 5e-6, bp::arg("threads") = 1),
+            bp::arg("skin") = 5e-6, bp::arg("threads") = 1, bp::arg("yarn_contacts") = true),
            "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction >= 0, mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
            "in [0, 1] per step, correction_slop [m], broad_phase 'tree' or 'sap', skin [m] >= 0 (Verlet skin of "
-           "the broad phase), threads >= 1 (narrow phase; same contacts for any count). See woven.contact.")
+           "the broad phase), threads >= 1 (narrow phase; same contacts for any count), yarn_contacts (False: only "
+           "contacts with rigid bodies). See woven.contact.")
       .def("disable_collisions", +[](FabricEngine& e) { e.disableCollisions(); })
       .add_property("collisions_enabled", +[](FabricEngine& e) { return e.collisions() != nullptr; })
       .def("settle_sections", +[](FabricEngine& e, int passes) { return stageOf(e).settle(e.fabric(), passes); },
@@ -382,6 +488,57 @@ BOOST_PYTHON_MODULE(_woven) {
       .def("collision_stats", &collisionStats, "dict: last step's counts, and maxima since the start (SI)")
       .def("_candidate_pairs", &candidatePairsPy, (bp::arg("broad_phase")))
       .def("_contacts", &contactsPy)
+      .def("enable_breakage", &enableBreakage,
+           (bp::arg("strain") = 0.0, bp::arg("filter_length") = 1e-3, bp::arg("weibull_m") = 0.0, bp::arg("seed") = 1),
+           "Yarn breakage: an element breaks when its strain, low-pass filtered in time over tau = "
+           "filter_length / c [m / (m/s)] (0: raw element strain), passes the failure strain (strain <= 0: each "
+           "yarn's material failure_strain; else in (0, 10]). weibull_m in [1, 100] draws each yarn's strength "
+           "from a Weibull law of that modulus with the failure strain as mean (seed >= 0); 0: no scatter.")
+      .def("disable_breakage", +[](FabricEngine& e) { e.dynamics().configureBreakage(BreakageParams{}); })
+      .add_property("breakage_enabled", +[](FabricEngine& e) { return e.dynamics().breakage().enabled(); })
+      .def("break_log", &breakLog, "list of dicts: step, time [s], yarn, element, position [m], strain (filtered) "
+           "and raw_strain [-], energy released [J]")
+      .add_property("broken_elements", +[](FabricEngine& e) { return e.dynamics().breakage().brokenElements(); })
+      .add_property("broken_yarns", +[](FabricEngine& e) { return e.dynamics().breakage().brokenYarns(e.fabric()); })
+      .def("_filtered_strains", +[](FabricEngine& e) { return bytesOf(e.dynamics().breakage().filteredStrain()); })
+      .def("_yarn_strengths", +[](FabricEngine& e) { return bytesOf(e.dynamics().breakage().yarnStrength()); })
+      .def("_alive", +[](FabricEngine& e) { return bytesOf(e.fabric().alive); })
+      .def("add_body", &addBody,
+           (bp::arg("id"), bp::arg("parts"), bp::arg("mass"), bp::arg("inertia"), bp::arg("pos"), bp::arg("ori"),
+            bp::arg("vel"), bp::arg("ang_vel")),
+           "Adds a rigid body the fabric collides with (needs collisions on): YADE body id, parts [('box', "
+           "half_extents [m], offset [m], Quaternion) or ('sphere', radius [m], offset, Quaternion)] in the body "
+           "frame, mass [kg] (0 or inf: kinematic), principal inertia [kg m^2], pos [m], ori, vel [m/s], "
+           "ang_vel [rad/s]. Returns its index.")
+      .add_property("n_bodies", +[](FabricEngine& e) { return e.collisions() ? static_cast<int>(e.collisions()->bodies.size()) : 0; })
+      .def("body", &bodyDict, (bp::arg("index")), "dict: id, mass, inertia, pos, ori, vel, ang_vel, kinetic_energy [J], parts")
+      .def("set_body_state", &setBodyState, (bp::arg("index"), bp::arg("pos"), bp::arg("ori"), bp::arg("vel"), bp::arg("ang_vel")),
+           "State at the start of the next step (SI).")
+      .def("body_overlap", +[](FabricEngine& e, int k) { bodyAt(e, k); return bodyStage(e).bodyOverlap(e.fabric(), k); },
+           (bp::arg("index")), "largest overlap of the body with a yarn as things stand [m] (<= 0: clear)")
+      .def("pop_body", +[](FabricEngine& e) { if (e.collisions() && !e.collisions()->bodies.empty()) e.collisions()->bodies.pop_back(); })
+      .def("_body_parts", +[](FabricEngine& e, int k) {  // [(kind, half extents | radius, centre, axes rows)]
+        const RigidBody& b = bodyAt(e, k);
+        bp::list out;
+        for (std::size_t i = 0; i < b.parts.size(); ++i) {
+          const Mat3 A = b.partAxes(i);
+          bp::list rows;
+          for (int r = 0; r < 3; ++r) rows.append(bp::make_tuple(A(r, 0), A(r, 1), A(r, 2)));
+          if (b.parts[i].type == RigidPart::Type::Box) out.append(bp::make_tuple("box", b.parts[i].halfSize, b.partCentre(i), rows));
+          else out.append(bp::make_tuple("sphere", b.parts[i].radius, b.partCentre(i), rows));
+        }
+        return out;
+      })
+      .def("clear_bodies", +[](FabricEngine& e) { if (e.collisions()) e.collisions()->bodies.clear(); })
+      .def("_yade_step", &yadeStep, (bp::arg("dt"), bp::arg("bodies"), bp::arg("rewind")))
+      .def("_body_contacts", +[](FabricEngine& e) {  // cp, body, part, gap [m], normal x y z, point x y z, s, time [s]
+        std::vector<Real> out;
+        for (const BodyContact& c : stageOf(e).bodyContacts())
+          out.insert(out.end(), {Real(c.cp), Real(c.body), Real(c.part), c.gap, c.normal.x(), c.normal.y(), c.normal.z(),
+                                 c.point.x(), c.point.y(), c.point.z(), c.s, c.time});
+        return bytesOf(out);
+      })
+      .def("_section_dirs", +[](FabricEngine& e) { return bytesOf(e.fabric().secDir); })
       .def("_section_flattening", +[](FabricEngine& e) { return bytesOf(e.fabric().secFlat); })
       .def("_section_semi_axes", &semiAxesPy);
 }

@@ -65,6 +65,13 @@ void ChainDynamics::setPointForce(Index i, const Vec3& F) {
   if (started_) refreshForces();
 }
 
+void ChainDynamics::configureBreakage(const BreakageParams& p) {
+  p.validate();
+  if (!started_) start();
+  computeForces(0.0);  // strains of the current state: the filter starts from them
+  breakage_.configure(f_, p);
+}
+
 void ChainDynamics::setBodyAcceleration(const Vec3& g) {
   require(g.allFinite(), "gravity", g.norm(), "finite [m/s^2]");
   loads_.bodyAcceleration = g;
@@ -92,6 +99,8 @@ void ChainDynamics::start() {
   books_.work = 0;
   books_.contact = 0;
   books_.contactInput = 0;
+  books_.released = 0;
+  books_.bodyWork = 0;
   Real ke = 0;
   for (Index i = 0; i < f_.nNodes(); ++i) ke += 0.5 * f_.mass[i] * f_.vel[i].squaredNorm();
   books_.kinetic = ke;
@@ -244,11 +253,26 @@ void ChainDynamics::step(Real dt, StepHook* hook) {
     if (std::isfinite(ke)) bookContact(hook->beforeDrift(f_, dt));
     gravity ? drift<true>(dt, p) : drift<false>(dt, p);
     if (std::isfinite(ke)) bookContact(hook->afterDrift(f_, dt));
+    // What the bodies gave is work on the fabric, not contact dissipation: move it across.
+    const Real bw = hook->takeBodyWork();
+    books_.work += bw, books_.bodyWork += bw, books_.contact += bw;
   }
   if (!std::isfinite(ke)) failNonFinite();
   books_.kinetic = ke;
   if (gravity) books_.work += loads_.bodyAcceleration.dot(p) * dt;
-  springForces<false>(dt);
+  if (breakage_.enabled()) {
+    const Real damped = books_.damped;
+    springForces<true>(dt);  // strains at x_{n+1} for the breakage filter
+    const long before = breakage_.brokenElements();
+    const Real released = breakage_.apply(f_, dt, step_ + 1, time_ + dt);
+    if (breakage_.brokenElements() > before) {  // forces and books without the broken elements
+      books_.released += released;
+      books_.damped = damped;
+      springForces<true>(dt);
+    }
+  } else {
+    springForces<false>(dt);
+  }
   finishLoads(dt);
   ++step_;
   time_ += dt;
@@ -315,6 +339,7 @@ void ChainDynamics::checkpoint() {
   goodVel_ = f_.vel;
   goodFlat_ = f_.secFlat;
   goodDir_ = f_.secDir;
+  if (breakage_.enabled()) goodAlive_ = f_.alive, goodStiffness_ = f_.stiffness, goodDamping_ = f_.damping;
   goodStep_ = step_;
   goodTime_ = time_;
   goodDtPrev_ = dtPrev_;
@@ -333,6 +358,8 @@ void ChainDynamics::restoreLastGood() {
   f_.vel = goodVel_;
   f_.secFlat = goodFlat_;
   f_.secDir = goodDir_;
+  if (goodAlive_.size() == f_.alive.size())
+    f_.alive = goodAlive_, f_.stiffness = goodStiffness_, f_.damping = goodDamping_;
   step_ = goodStep_;
   time_ = goodTime_;
   dtPrev_ = goodDtPrev_;

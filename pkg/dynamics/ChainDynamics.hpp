@@ -9,6 +9,7 @@
 // Stable for dt <= dt_crit = min_e l0*sqrt(rho/E)*(sqrt(1+xi^2) - xi)  (physics-reference.md).
 #pragma once
 #include "core/Types.hpp"
+#include "dynamics/Breakage.hpp"
 #include "dynamics/Energy.hpp"
 #include "dynamics/Loads.hpp"
 #include "fabric/Fabric.hpp"
@@ -37,6 +38,9 @@ class StepHook {
   virtual Real beforeDrift(Fabric& f, Real dt) = 0;
   /// After the drift, on x_{n+1} and v_{n+1/2}, before the forces; returns the kinetic energy added [J].
   virtual Real afterDrift(Fabric& f, Real dt) { return 0; }
+  /// Work the hook's rigid bodies did on the fabric in the calls since the last take [J]: part of
+  /// the energy the calls returned that is not the contacts' dissipation (the books take it as work).
+  virtual Real takeBodyWork() { return 0; }
 };
 
 class ChainDynamics {
@@ -56,6 +60,10 @@ class ChainDynamics {
   void release(Index i);
   /// Constant point force [N] on node i (zero removes it).
   void setPointForce(Index i, const Vec3& F);
+  /// Turns breakage on or off (Breakage.hpp): validated first, then the yarn strengths are drawn and
+  /// the strain filter starts from the current strains.
+  void configureBreakage(const BreakageParams& p);
+  const Breakage& breakage() const { return breakage_; }
   /// Body acceleration [m/s^2] on every free node (gravity).
   void setBodyAcceleration(const Vec3& g);
   const Loads& loads() const { return loads_; }
@@ -94,7 +102,8 @@ class ChainDynamics {
   long lastGoodStep() const { return goodStep_; }
   Real lastGoodDt() const { return goodDtPrev_; }
   Real lastGoodTime() const { return goodTime_; }
-  /// Puts the last good state back into the fabric (positions, velocities, sections, step, time).
+  /// Puts the last good state back into the fabric (positions, velocities, sections, broken
+  /// elements, step, time).
   void restoreLastGood();
 
  private:
@@ -119,8 +128,10 @@ class ChainDynamics {
   Real time_ = 0;
   Real dtPrev_ = 0;
   Real dtCrit_ = 0;     // criticalTimeStep of the fabric: the engine's dt limit and the blow-up budget
+  Breakage breakage_;
   Vec3Array goodPos_, goodVel_, goodDir_;
-  std::vector<Real> goodFlat_;
+  std::vector<Real> goodFlat_, goodStiffness_, goodDamping_;
+  std::vector<std::uint8_t> goodAlive_;
   long goodStep_ = 0;
   Real goodTime_ = 0, goodDtPrev_ = 0;
   bool started_ = false;

@@ -1,5 +1,6 @@
 // Energy books of the chain dynamics. All in joules. "work" is what the loads (kinematic nodes,
-// point forces, body force) put in; the balance kinetic + elastic + damped + contact = initial + work
+// point forces, body force) and the rigid bodies' impulses put in; the balance
+// kinetic + elastic + damped + contact + released = initial + work
 // holds to the integrator's O(dt^2) accuracy (plus the positional corrections of residual overlaps,
 // which no book takes: docs/collisions.md).
 #pragma once
@@ -11,13 +12,15 @@ struct EnergyBooks {
   Real kinetic = 0;     ///< sum 1/2 m v^2 at the current integer step [J]
   Real elastic = 0;     ///< sum 1/2 K (l - l0)^2 over taut elements [J]
   Real damped = 0;      ///< energy dissipated by the element dashpots since the start [J]
-  Real work = 0;        ///< work done on the fabric by loads since the start [J]
+  Real work = 0;        ///< work done on the fabric by loads and by rigid bodies' impulses since the start [J]
+  Real bodyWork = 0;    ///< of which by the rigid bodies (YADE bodies coupled to the fabric) [J]
   Real contact = 0;     ///< energy taken out by the contact stage since the start [J] (impulses take, corrections give)
   Real contactInput = 0;  ///< energy the contact stage put in, summed step by step [J] (>= 0)
+  Real released = 0;    ///< elastic energy of broken elements, released at their break [J]
   Real initial = 0;     ///< kinetic + elastic at step 0 [J]
 
-  Real total() const { return kinetic + elastic + damped + contact; }
-  /// (kinetic + elastic + damped + contact) - (initial + work) [J]
+  Real total() const { return kinetic + elastic + damped + contact + released; }
+  /// (kinetic + elastic + damped + contact + released) - (initial + work) [J]
   Real balanceError() const { return total() - initial - work; }
 };
 

@@ -85,6 +85,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
     CPContact c;
     for (std::size_t k = n * t / threads; k < n * (t + 1) / threads; ++k) {
       const CPPair& pr = pairs_[k];
+      if (!f.alive[pr.a] || !f.alive[pr.b]) continue;  // broken since the broad phase
       if (cpContactStatic(f, bounds_, pr.a, pr.b, params_.margin, params_.rule, c) ||
           (dt > 0 && cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c)))
         out.push_back(c);
@@ -96,6 +97,18 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
   for (std::thread& th : pool) th.join();
   contacts_.clear();
   for (const auto& s : slices_) contacts_.insert(contacts_.end(), s.begin(), s.end());
+}
+
+void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
+  bodyContacts_.clear();
+  if (bodies.empty()) return;
+  bodyCollider.collide(f, grown_, grow_, bodies, dt, bodyPairs_);
+  BodyContact c;
+  for (const BodyCandidate& pc : bodyPairs_)
+    if (cpBodyContact(f, bounds_[pc.cp], pc.cp, bodies[pc.body], pc.part, dt, params_.margin, params_.rule, c)) {
+      c.body = pc.body;
+      bodyContacts_.push_back(c);
+    }
 }
 
 // Paper Sec. 5.1 steps 1-3: take up each overlap by flattening the sections of both CPs (half each,
@@ -141,11 +154,15 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
 
 Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   auto t = Clock::now();
+  for (const RigidBody& b : bodies) b.validate();
   refit(f, dt);
   stats.seconds[0] += since(t);
-  broad(f);
+  if (params_.yarnContacts) broad(f);
+  else pairs_.clear();
   stats.seconds[1] += since(t);
-  narrow(f, dt);
+  if (params_.yarnContacts) narrow(f, dt);
+  else contacts_.clear();
+  narrowBodies(f, dt);
   stats.seconds[2] += since(t);
 
   stats.candidates = static_cast<long>(pairs_.size());
@@ -162,7 +179,12 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
         return flatteningCapacity(f, tangent_, c.cpA, c.normal, params_) +
                flatteningCapacity(f, tangent_, c.cpB, c.normal, params_);
       },
-      dt, params_, stats.impulses);
+      dt, params_, stats.impulses, bodyContacts_, &bodies);
+  bodyWork_ += stats.impulses.bodyWork;
+  stats.bodyContacts = static_cast<long>(bodyContacts_.size());
+  stats.bodyPenetration = 0;
+  for (const BodyContact& c : bodyContacts_) stats.bodyPenetration = std::max(stats.bodyPenetration, -c.gap);
+  stats.maxBodyPenetration = std::max(stats.maxBodyPenetration, stats.bodyPenetration);
   stats.correctionEnergy = ImpulseLaw::correctPositions(f, contacts_, params_);
   stats.seconds[3] += since(t);
 
@@ -173,8 +195,13 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   return stats.impulses.energyChange + stats.correctionEnergy;
 }
 
-Real CollisionStage::afterDrift(Fabric& f, Real) {
-  const Real dE = law_.restitute(f, params_);
+Real CollisionStage::afterDrift(Fabric& f, Real dt) {
+  for (RigidBody& b : bodies) {
+    b.pos += dt * b.vel;
+    const Real angle = b.angVel.norm() * dt;  // YADE's rotation of a spherical body over the step
+    if (angle > 0) b.ori = (Quat(Eigen::AngleAxis<Real>(angle, b.angVel.normalized())) * b.ori).normalized();
+  }
+  const Real dE = law_.restitute(f, params_, &bodies, &bodyWork_);
   stats.impulses.energyChange += dE;
   return dE;
 }
@@ -192,6 +219,18 @@ Real CollisionStage::settle(Fabric& f, int maxPasses) {
     if (passes == 0) break;
   }
   return left;
+}
+
+Real CollisionStage::bodyOverlap(Fabric& f, int k) {
+  refit(f, 0);
+  const RigidBody& b = bodies.at(k);
+  Real worst = -INFINITY;
+  BodyContact c;
+  for (std::size_t part = 0; part < b.parts.size(); ++part)
+    for (Index e = 0; e < f.nElems(); ++e)
+      if (f.alive[e] && cpBodyContact(f, bounds_[e], e, b, static_cast<int>(part), 0, params_.margin, params_.rule, c))
+        worst = std::max(worst, -c.gap);
+  return worst;
 }
 
 Real CollisionStage::overlap(Fabric& f) {

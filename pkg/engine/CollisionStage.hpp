@@ -4,8 +4,12 @@
 //   narrow    static SAT contact, else the moving SAT's first contact within the step (geometry functor)
 //   respond   flatten sections (passes), impulses where flattening cannot absorb the approach, then
 //             positional correction of residual overlaps (law)
+// Rigid bodies (YADE's projectile, clamps: shape/RigidBody) join the same step: a broad phase of their
+// parts against the CPs (BodyCollider), the body geometry functor (geom/BodyContact), and their rows
+// in the same impulse solve; after the fabric's drift the bodies drift with their new velocities.
 // It runs between the kick and the drift (ChainDynamics::StepHook) on x_n and v_{n+1/2}.
 #pragma once
+#include "collider/BodyCollider.hpp"
 #include "collider/SweepAndPrune.hpp"
 #include "collider/YarnTreeCollider.hpp"
 #include "dynamics/ChainDynamics.hpp"
@@ -29,13 +33,16 @@ struct CollisionStats {
   ImpulseReport impulses;     ///< the impulse solve
   Real penetration = 0;       ///< largest overlap left after flattening, before correction [m]
   Real correctionEnergy = 0;  ///< spring energy the positional correction put in [J]
+  long bodyContacts = 0;      ///< CP-body contacts (static + moving)
+  Real bodyPenetration = 0;   ///< largest CP-body overlap at the start of the step [m]
   // since the start
   long steps = 0;
   long broadPhases = 0;       ///< broad phases run (the other steps reused the pairs: Verlet skin)
   Real maxPenetration = 0;    ///< [m]
+  Real maxBodyPenetration = 0;  ///< [m]
   long maxUnresolved = 0;     ///< most unresolved impulse rows in one step
   Real maxResidual = 0;       ///< [m/s]
-  Real seconds[4] = {0, 0, 0, 0};  ///< wall time in refit, broad, narrow, respond [s]
+  Real seconds[4] = {0, 0, 0, 0};  ///< wall time in refit, broad, narrow, respond [s] (bodies included)
 };
 
 class CollisionStage : public StepHook {
@@ -50,8 +57,24 @@ class CollisionStage : public StepHook {
   /// One collision pass (the StepHook of ChainDynamics). Returns the energy the impulses and the
   /// positional correction added [J].
   Real beforeDrift(Fabric& f, Real dt) override;
-  /// The restitution pass of the impulse law (nothing for e = 0).
+  /// Drifts the rigid bodies with their new velocities, then the restitution pass of the impulse
+  /// law (nothing for e = 0).
   Real afterDrift(Fabric& f, Real dt) override;
+  Real takeBodyWork() override {
+    const Real w = bodyWork_;
+    bodyWork_ = 0;
+    return w;
+  }
+
+  /// Rigid bodies colliding with the fabric. Each step they are taken at the start of the step
+  /// (pose x_n, velocities v_{n+1/2}) and left at its end (x_{n+1}, drifted with the velocities the
+  /// impulses gave): the adapter sets them before FabricEngine::step and reads them after.
+  std::vector<RigidBody> bodies;
+  const std::vector<BodyContact>& bodyContacts() const { return bodyContacts_; }
+  /// Largest overlap of body k with any CP in the fabric as it stands [m] (<= 0: clear of it); moves
+  /// nothing.
+  Real bodyOverlap(Fabric& f, int k);
+  BodyCollider bodyCollider;
 
   /// Flattens the sections of a fabric at rest until no overlap is left or every overlapping section
   /// is locked (no velocities or positions change): turns the circular sections of a freshly built
@@ -77,6 +100,7 @@ class CollisionStage : public StepHook {
   void refit(Fabric& f, Real dt);
   void broad(const Fabric& f);
   void narrow(const Fabric& f, Real dt);
+  void narrowBodies(const Fabric& f, Real dt);
   int flatten(Fabric& f, int maxPasses);
 
   ContactParams params_;
@@ -87,6 +111,9 @@ class CollisionStage : public StepHook {
   std::vector<Real> grow_, flatBefore_;
   std::vector<CPPair> pairs_;
   std::vector<CPContact> contacts_;
+  std::vector<BodyCandidate> bodyPairs_;
+  std::vector<BodyContact> bodyContacts_;
+  Real bodyWork_ = 0;
   std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per thread
   std::vector<std::uint8_t> dirty_;
   ImpulseLaw law_;

@@ -28,6 +28,9 @@ struct ContactParams {
   /// CPs of one yarn this many elements apart or closer never collide (>= 1); raised per yarn to
   /// 1 + ceil(2 r0 / l0) (PairFilter).
   Index selfExclude = 1;
+  /// Contacts between yarns (CP-CP) on; false leaves only the contacts with rigid bodies (yarns then
+  /// pass through each other: for scenes where only the projectile matters, and for comparisons).
+  bool yarnContacts = true;
   /// Threads for the narrow phase (>= 1). Each candidate pair is tested on its own and the contacts
   /// are gathered in pair order, so any count gives the same contacts, bit for bit.
   int threads = 1;

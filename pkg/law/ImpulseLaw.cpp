@@ -18,10 +18,54 @@ inline void applyImpulse(Fabric& f, const Index node[4], const Real w[4], const 
 }
 }  // namespace
 
+Vec3 ImpulseLaw::rowVelocity(const Fabric& f, const Row& r) const {
+  Vec3 v = relativeVelocity(f, r.node, r.w);
+  if (r.body >= 0) {
+    const BodyVelocity& b = bodyVel_[r.body];
+    v += b.v + b.w.cross(r.arm);
+  }
+  return v;
+}
+
+void ImpulseLaw::applyRow(Fabric& f, const Row& r, const Vec3& J) {
+  applyImpulse(f, r.node, r.w, J);
+  if (r.body >= 0) {
+    BodyVelocity& b = bodyVel_[r.body];
+    b.v += b.invM * J;
+    b.w += b.invI * r.arm.cross(J);
+  }
+}
+
+void ImpulseLaw::loadBodies(const std::vector<RigidBody>* bodies) {
+  bodyVel_.clear();
+  if (!bodies) return;
+  for (const RigidBody& b : *bodies) bodyVel_.push_back({b.vel, b.angVel, b.invMass(), b.invInertiaWorld(), b.kineticEnergy()});
+}
+
+Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies) {
+  if (!bodies) return 0;
+  Real work = 0;
+  for (std::size_t k = 0; k < bodies->size(); ++k) {
+    RigidBody& b = (*bodies)[k];
+    if (!b.dynamic()) continue;
+    b.vel = bodyVel_[k].v, b.angVel = bodyVel_[k].w;
+    work += bodyVel_[k].ke0 - b.kineticEnergy();
+  }
+  // A kinematic body gives the fabric its impulse times its own velocity at the point.
+  for (const Row& r : rows_)
+    if (r.body >= 0 && !(*bodies)[r.body].dynamic()) {
+      const BodyVelocity& b = bodyVel_[r.body];
+      work += -(r.lambda * r.n + r.lambdaT).dot(b.v + b.w.cross(r.arm));
+    }
+  return work;
+}
+
 void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, const Capacity& capacity, Real dt,
-                         const ContactParams& p, ImpulseReport& rep) {
+                         const ContactParams& p, ImpulseReport& rep, const std::vector<BodyContact>& bodyContacts,
+                         std::vector<RigidBody>* bodies) {
   rep = ImpulseReport{};
   rows_.clear();
+  loadBodies(bodies);
   for (std::size_t c = 0; c < contacts.size(); ++c) {
     Row r;
     nodesAndWeights(f, contacts[c], r.node, r.w);
@@ -40,6 +84,25 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     r.target = -allowed;
     rows_.push_back(r);
   }
+  for (const BodyContact& c : bodyContacts) {
+    Row r;
+    r.node[0] = f.elem0[c.cp], r.node[1] = r.node[0] + 1, r.node[2] = r.node[3] = r.node[0];
+    r.w[0] = -(1 - c.s), r.w[1] = -c.s, r.w[2] = r.w[3] = 0;
+    r.n = c.normal;
+    r.body = c.body;
+    r.arm = c.point - (*bodies)[c.body].pos;
+    r.vn0 = rowVelocity(f, r).dot(r.n);
+    const Real allowed = std::max(c.gap, Real(0)) / dt;
+    if (!(r.vn0 < -allowed - p.tolerance)) continue;
+    const BodyVelocity& b = bodyVel_[c.body];
+    const Vec3 rn = r.arm.cross(r.n);
+    Real K = b.invM + rn.dot(b.invI * rn);
+    for (int k = 0; k < 2; ++k) K += r.w[k] * r.w[k] * f.invMass[r.node[k]];
+    if (!(K > 0)) continue;  // kinematic CP and body
+    r.invK = 1 / K;
+    r.target = -allowed;
+    rows_.push_back(r);
+  }
   rep.rows = static_cast<long>(rows_.size());
   if (rows_.empty()) return;
 
@@ -52,12 +115,13 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
 
   rep.iterations = solve(f, p, p.friction > 0);
   for (const Row& r : rows_) {
-    const Real vn = relativeVelocity(f, r.node, r.w).dot(r.n);
+    const Real vn = rowVelocity(f, r).dot(r.n);
     const Real miss = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
     rep.residual = std::max(rep.residual, miss);
     rep.unresolved += miss > p.tolerance;
   }
   rep.energyChange = energyChange(f);
+  rep.bodyWork = storeBodies(bodies);
 }
 
 void ImpulseLaw::keepVelocities(const Fabric& f) {
@@ -85,7 +149,7 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
   for (int it = 0; it < p.maxIterations; ++it) {
     Real worst = 0;
     for (Row& r : rows_) {
-      const Vec3 vr = relativeVelocity(f, r.node, r.w);
+      const Vec3 vr = rowVelocity(f, r);
       const Real vn = vr.dot(r.n);
       // Miss: below target, or above it while still pushing (the accumulated impulse can give back).
       worst = std::max(worst, r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn);
@@ -100,15 +164,16 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
         J += lt - r.lambdaT;
         r.lambdaT = lt;
       }
-      applyImpulse(f, r.node, r.w, J);
+      applyRow(f, r, J);
     }
     if (worst <= p.tolerance) return it + 1;
   }
   return p.maxIterations;
 }
 
-Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p) {
+Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p, std::vector<RigidBody>* bodies, Real* bodyWork) {
   if (p.restitution == 0 || rows_.empty()) return 0;
+  loadBodies(bodies);
   std::size_t kept = 0;
   for (const Row& r : rows_) {
     if (!(r.lambda > 0 && r.vn0 < -p.tolerance)) continue;
@@ -120,6 +185,8 @@ Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p) {
   rows_.resize(kept);
   keepVelocities(f);
   solve(f, p, false);
+  const Real work = storeBodies(bodies);
+  if (bodyWork) *bodyWork += work;
   return energyChange(f);
 }
 

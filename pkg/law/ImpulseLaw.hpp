@@ -14,11 +14,16 @@
 //     locked contact in touch stops approaching: Eq. 5 with e = 0);
 //  2. after the drift (restitute), rows that pushed and approached faster than the tolerance get
 //     vn' >= -e vn0: with the pair now in touch, Eq. 5 with the approach speed vn0 it had.
+// A contact of a CP with a rigid body (geom/BodyContact) is a row whose B side is the body: its
+// velocity at the point is v + w x r, and 1/m_eff gains 1/M + (r x n) . I^-1 (r x n), so the body's
+// velocity and angular velocity change with its mass and inertia (J n on the body, -J n on the CP:
+// momentum is exchanged exactly). Its room is the gap alone: a body does not flatten the sections.
 // Simultaneous rows are solved by projected Gauss-Seidel on accumulated impulses (J >= 0, and the
 // Coulomb friction impulse within mu J) until no row misses its target by more than the tolerance
 // or maxIterations is reached; the residual and unresolved rows are reported, never hidden.
 #pragma once
 #include "fabric/Fabric.hpp"
+#include "geom/BodyContact.hpp"
 #include "geom/CPContact.hpp"
 #include "law/ContactParams.hpp"
 #include <functional>
@@ -32,6 +37,9 @@ struct ImpulseReport {
   Real residual = 0;        ///< largest miss of a row's target after the last sweep [m/s]
   long unresolved = 0;      ///< rows still missing their target by more than the tolerance
   Real energyChange = 0;    ///< change of the step's kinetic energy (v_n) the impulses make [J]
+  /// Work the rigid bodies did on the fabric [J]: minus their kinetic energy change (dynamic
+  /// bodies), the impulse on the fabric times the body's velocity at the point (kinematic ones).
+  Real bodyWork = 0;
 };
 
 class ImpulseLaw {
@@ -40,13 +48,14 @@ class ImpulseLaw {
   /// that approach faster than their gap alone allows.
   using Capacity = std::function<Real(const CPContact&)>;
 
-  /// Applies the impulses to Fabric::vel; dt [s] the step.
+  /// Applies the impulses to Fabric::vel (and to the bodies' vel and angVel); dt [s] the step.
   void resolve(Fabric& f, const std::vector<CPContact>& contacts, const Capacity& capacity, Real dt,
-               const ContactParams& p, ImpulseReport& report);
+               const ContactParams& p, ImpulseReport& report, const std::vector<BodyContact>& bodyContacts = {},
+               std::vector<RigidBody>* bodies = nullptr);
 
   /// Pass 2 after the drift: restitution e of the rows of the last resolve() (see above). Returns
-  /// the kinetic energy change [J] (0 for e = 0).
-  Real restitute(Fabric& f, const ContactParams& p);
+  /// the fabric's kinetic energy change [J] (0 for e = 0) and adds the bodies' work to *bodyWork.
+  Real restitute(Fabric& f, const ContactParams& p, std::vector<RigidBody>* bodies = nullptr, Real* bodyWork = nullptr);
 
   /// Moves the nodes of contacts still overlapping (gap < 0) apart along the normal by
   /// positionCorrection * (-gap), weighted by w/m as an impulse would, each node only across its own
@@ -66,11 +75,24 @@ class ImpulseLaw {
     Real vn0;           // normal velocity before the impulses [m/s]
     Real lambda = 0;    // accumulated normal impulse [N s]
     Vec3 lambdaT = Vec3::Zero();
+    int body = -1;      // B side: a rigid body (weights w[2], w[3] are 0), at arm r from its centre
+    Vec3 arm = Vec3::Zero();
   };
+  struct BodyVelocity {  // a body's velocities while the rows are solved
+    Vec3 v, w;
+    Real invM;
+    Mat3 invI;
+    Real ke0 = 0;        // kinetic energy before the impulses [J]
+  };
+  Vec3 rowVelocity(const Fabric& f, const Row& r) const;     // relative velocity of the contact points
+  void applyRow(Fabric& f, const Row& r, const Vec3& J);      // J on B, -J on A
+  void loadBodies(const std::vector<RigidBody>* bodies);
+  Real storeBodies(std::vector<RigidBody>* bodies);           // writes back, returns the bodies' work
   int solve(Fabric& f, const ContactParams& p, bool friction);  // Gauss-Seidel sweeps, returns the count
   void keepVelocities(const Fabric& f);      // of the touched nodes, before the impulses
   Real energyChange(const Fabric& f) const;  // kinetic energy of the integer step the impulses add [J]
   std::vector<Row> rows_;
+  std::vector<BodyVelocity> bodyVel_;
   Vec3Array vBefore_;
   Real dt_ = 0;
   std::vector<Index> touched_;

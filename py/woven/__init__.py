@@ -38,8 +38,10 @@ from ._woven import (FabricEngine, Fabric, Pattern, YarnMaterial, YarnSection, W
 from .weave import weave, pattern, WEAVE_KEYS  # noqa: E402,F401
 from .engine import attach  # noqa: E402,F401
 from .arrays import (positions, velocities, strains, tensions, masses, rest_lengths,  # noqa: E402,F401
-                     section_flattening, section_semi_axes, contacts, candidate_pairs)
+                     section_flattening, section_semi_axes, contacts, candidate_pairs,
+                     section_dirs, alive, filtered_strains, body_contacts)
 from . import contact  # noqa: E402,F401
+from . import coupling  # noqa: E402,F401
 from . import theory  # noqa: E402,F401
 
 __version__ = '0.1.0'

@@ -50,3 +50,26 @@ def contacts(engine):
 def candidate_pairs(engine, broad_phase='tree'):
     """CP pairs (a < b) whose broad-phase boxes overlap now, from 'tree' or 'sap'; shape (n, 2)."""
     return np.frombuffer(engine._candidate_pairs(broad_phase), dtype=np.int32).reshape(-1, 2)
+
+
+def section_dirs(engine):
+    """Unit minor-axis (flattened) direction of every node's section, shape (n_nodes, 3) [-]."""
+    return np.frombuffer(engine._section_dirs(), dtype=np.float64).reshape(-1, 3)
+
+
+def alive(engine):
+    """1 for every element (CP) still whole, 0 for a broken one, shape (n_elements,)."""
+    return np.frombuffer(engine._alive(), dtype=np.uint8)
+
+
+def filtered_strains(engine):
+    """The breakage filter's strain of every element, shape (n_elements,) [-] (empty with breakage off)."""
+    return np.frombuffer(engine._filtered_strains(), dtype=np.float64)
+
+
+def body_contacts(engine):
+    """Contacts of CPs with rigid bodies in the last step: structured array with cp, body, part, gap [m],
+    normal (3), point (3) [m], s, time [s]."""
+    a = np.frombuffer(engine._body_contacts(), dtype=np.float64).reshape(-1, 12)
+    return {'cp': a[:, 0].astype(int), 'body': a[:, 1].astype(int), 'part': a[:, 2].astype(int), 'gap': a[:, 3],
+            'normal': a[:, 4:7], 'point': a[:, 7:10], 's': a[:, 10], 'time': a[:, 11]}

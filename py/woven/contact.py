@@ -19,6 +19,7 @@ CONTACT_KEYS = {
     'broad_phase': ('tree', '', "'tree' (OBB tree per yarn) or 'sap' (sweep and prune)"),
     'skin': (5e-6, 'm', 'Verlet skin: candidate pairs are kept while every CP box stays inside its box grown by this'),
     'threads': (1, '', 'threads of the narrow phase (same contacts, bit for bit, for any count)'),
+    'yarn_contacts': (True, '', 'contacts between yarns (False: only with rigid bodies; yarns pass through each other)'),
 }
 
 
@@ -30,5 +31,6 @@ def enable(engine, **kw):
     args = {k: kw.get(k, v[0]) for k, v in CONTACT_KEYS.items()}
     for k in ('max_iterations', 'flatten_passes', 'self_exclude', 'threads'):
         args[k] = int(args[k])
+    args['yarn_contacts'] = bool(int(args['yarn_contacts'])) if not isinstance(args['yarn_contacts'], bool) else args['yarn_contacts']
     engine.enable_collisions(**args)
     return engine

@@ -4,6 +4,11 @@ YADE's C++ Engine cannot be subclassed here (Debian ships no YADE headers), so t
 PyRunner with iterPeriod=1 whose command calls the C++ step with O.dt: about 30-45 us of Python per
 iteration (measured with `yade -n -x scripts/bench_pyrunner.py`), independent of the fabric size.
 O.time and O.iter stay the clock; the fabric's own step counter must follow O.iter.
+
+YADE bodies coupled to the fabric (woven.coupling.couple) are read before and written after each
+step; the adapter must run after YADE's NewtonIntegrator (attach appends it at the end), which has
+moved them from x_n to x_n + dt v already: the step takes them back to x_n, resolves the contacts
+with the fabric on the same (x_n, v_{n+1/2}) as the yarns, and moves them with the new velocities.
 """
 import yade.wrapper
 
@@ -14,8 +19,14 @@ last_error = None  #: the last exception a woven step raised (InstabilityError k
 
 def _step(key):
     global last_error
+    engine, rewind = _registry[key]
     try:
-        _registry[key].step(_O.dt)
+        if engine.n_bodies:
+            # Coupled YADE bodies: their state in, one step, their new state out (C++, a few
+            # attribute reads and writes per body; none per node).
+            engine._yade_step(_O.dt, _O.bodies, rewind)
+        else:
+            engine.step(_O.dt)
     except Exception as e:
         last_error = e
         raise
@@ -43,7 +54,11 @@ def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
         raise ValueError('dt = %.12g is invalid: allowed (0, dt_crit = %.12g] s (stable limit of the chain; '
                          'set O.dt below it or attach(..., set_dt=True))' % (_O.dt, engine.dt_crit))
     key = len(_registry)
-    _registry[key] = engine
+    # Bodies coupled to the fabric (woven.coupling) were already moved over this iteration's step
+    # when a NewtonIntegrator runs before the adapter: the step rewinds them to x_n first.
+    newton = [i for i, e in enumerate(_O.engines) if isinstance(e, yade.wrapper.NewtonIntegrator) and not e.dead]
+    rewind = bool(newton) and append
+    _registry[key] = (engine, rewind)
     # PyRunner compiles its command every iteration: keep it short (a name put into __main__, where
     # YADE runs PyRunner commands, and a small key): measured 60-70 -> 40-45 us per iteration.
     import __main__

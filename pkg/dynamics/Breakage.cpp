@@ -1,0 +1,74 @@
+#include "dynamics/Breakage.hpp"
+#include "core/Errors.hpp"
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace woven {
+
+void BreakageParams::validate() const {
+  require(std::isfinite(threshold) && threshold <= 10, "break_strain", threshold,
+          "(0, 10] (<= 0: the material's failure strain)");
+  require(std::isfinite(filterLength) && filterLength >= 0, "break_filter", filterLength, "[0, inf) m (0: raw strain)");
+  require(weibullModulus == 0 || (weibullModulus >= 1 && weibullModulus <= 100), "weibull_m", weibullModulus,
+          "0 (no scatter) or [1, 100]");
+}
+
+void Breakage::configure(const Fabric& f, const BreakageParams& p) {
+  p.validate();
+  p_ = p;
+  log_.clear();
+  strength_.assign(f.yarns.size(), 0);
+  std::mt19937_64 rng(p.seed);
+  for (std::size_t y = 0; y < f.yarns.size(); ++y) {
+    const Real mean = p.threshold > 0 ? p.threshold : f.materials[f.yarns[y].material].failureStrain;
+    Real s = mean;
+    if (p.weibullModulus > 0) {
+      // U in [0, 1) from the top 53 bits: the same on every platform (std distributions are not).
+      const Real U = static_cast<Real>(rng() >> 11) * 0x1.0p-53;
+      const Real scale = mean / std::tgamma(1 + 1 / p.weibullModulus);
+      s = scale * std::pow(-std::log1p(-U), 1 / p.weibullModulus);
+    }
+    strength_[y] = s;
+  }
+  filtered_ = f.strain;
+  rate_.assign(f.nElems(), 0);
+  for (Index e = 0; e < f.nElems(); ++e) {
+    const YarnMaterial& m = f.materials[f.yarns[f.elemYarn[e]].material];
+    rate_[e] = p.filterLength > 0 ? std::sqrt(m.E / m.rho) / p.filterLength : INFINITY;
+  }
+}
+
+Real Breakage::apply(Fabric& f, Real dt, long step, Real time) {
+  if (!p_.enabled) return 0;
+  Real released = 0;
+  for (Index e = 0, n = f.nElems(); e < n; ++e) {
+    if (!f.alive[e]) continue;
+    const Real eps = f.strain[e];
+    // Exact first-order low-pass over the step (exp: stable for any dt/tau; tau = 0 gives eps).
+    filtered_[e] += (1 - std::exp(-dt * rate_[e])) * (eps - filtered_[e]);
+    const Index y = f.elemYarn[e];
+    if (!(filtered_[e] > strength_[y])) continue;
+    const Index a = f.elem0[e];
+    const Real stretch = (f.pos[a + 1] - f.pos[a]).norm() - f.restLength[e];
+    BreakEvent ev;
+    ev.step = step, ev.time = time, ev.yarn = y, ev.element = e;
+    ev.position = 0.5 * (f.pos[a] + f.pos[a + 1]);
+    ev.strain = filtered_[e], ev.rawStrain = eps;
+    ev.energy = stretch > 0 ? 0.5 * f.stiffness[e] * stretch * stretch : 0.0;
+    released += ev.energy;
+    log_.push_back(ev);
+    f.alive[e] = 0;
+    f.stiffness[e] = 0;
+    f.damping[e] = 0;
+  }
+  return released;
+}
+
+long Breakage::brokenYarns(const Fabric& f) const {
+  std::vector<std::uint8_t> hit(f.yarns.size(), 0);
+  for (const BreakEvent& ev : log_) hit[ev.yarn] = 1;
+  return static_cast<long>(std::count(hit.begin(), hit.end(), 1));
+}
+
+}  // namespace woven

@@ -1,0 +1,74 @@
+// Yarn breakage (paper Sec. 6.2): an element (CP) is removed when its strain passes the failure
+// strain of its yarn. Removal keeps the element's slot (Fabric::alive = 0, K = c = 0, see Fabric.hpp),
+// so indices never shift, and releases the element's elastic energy 1/2 K (l - l0)^2 into its own
+// book.
+//
+// The strain compared with the threshold is low-pass filtered in time, per element:
+//     eps_f <- eps_f + (1 - exp(-dt/tau)) (eps - eps_f),      tau = filterLength / c,  c = sqrt(E/rho)
+// A step front in a discrete chain overshoots its plateau by up to ~1.27x for a few elements behind
+// the front (physics-reference.md, dispersion of the lattice): the raw element strain would break a
+// yarn whose plateau is well below the threshold. The overshoot lives for the few element transit
+// times l0/c it takes the front to pass; a strain held for longer than tau reaches the threshold with
+// a delay of about tau. filterLength = 0 compares the raw element strain (shown against the filtered
+// one in tests/cpp/test_breakage.cpp and docs/ballistic.md).
+//
+// Optional Weibull distribution of yarn strength: each yarn's failure strain is drawn from a
+// Weibull law of modulus m whose mean is the material's failure strain,
+//     eps_b = scale * (-ln(1 - U))^(1/m),   scale = mean / Gamma(1 + 1/m),
+// with U from a 64-bit Mersenne twister seeded by the user (the same seed, the same strengths).
+#pragma once
+#include "core/Types.hpp"
+#include "fabric/Fabric.hpp"
+#include <cstdint>
+#include <vector>
+
+namespace woven {
+
+struct BreakageParams {
+  bool enabled = false;
+  /// Failure strain [-] in (0, 10]; <= 0 here means "each yarn's material failureStrain".
+  Real threshold = 0;
+  /// Length over which the strain is averaged in time, as tau = filterLength / c [m] >= 0; 0: raw.
+  Real filterLength = 1e-3;
+  /// Weibull modulus of the yarn strengths [-]: 0 (all yarns at the threshold) or in [1, 100].
+  Real weibullModulus = 0;
+  std::uint64_t seed = 1;
+  void validate() const;
+};
+
+struct BreakEvent {
+  long step = 0;          ///< step at whose end the element broke
+  Real time = 0;          ///< [s]
+  Index yarn = -1, element = -1;
+  Vec3 position = Vec3::Zero();  ///< element midpoint [m]
+  Real strain = 0;        ///< the filtered strain that passed the threshold [-]
+  Real rawStrain = 0;     ///< the element strain at that moment [-]
+  Real energy = 0;        ///< elastic energy released [J]
+};
+
+class Breakage {
+ public:
+  /// Validates, draws the yarn strengths and starts the filter from the fabric's current strains
+  /// (Fabric::strain must be up to date).
+  void configure(const Fabric& f, const BreakageParams& p);
+  const BreakageParams& params() const { return p_; }
+  bool enabled() const { return p_.enabled; }
+
+  /// Feeds the strains of the step just made (Fabric::strain at x_{n+1}) to the filter and removes
+  /// the elements past their yarn's strength. Returns the elastic energy released [J].
+  Real apply(Fabric& f, Real dt, long step, Real time);
+
+  const std::vector<Real>& yarnStrength() const { return strength_; }   ///< [-] per yarn
+  const std::vector<Real>& filteredStrain() const { return filtered_; } ///< [-] per element
+  const std::vector<BreakEvent>& log() const { return log_; }
+  long brokenElements() const { return static_cast<long>(log_.size()); }
+  /// Yarns with at least one broken element.
+  long brokenYarns(const Fabric& f) const;
+
+ private:
+  BreakageParams p_;
+  std::vector<Real> strength_, filtered_, rate_;  // rate_: 1/tau per element [1/s]
+  std::vector<BreakEvent> log_;
+};
+
+}  // namespace woven

@@ -1,0 +1,83 @@
+#include "geom/BodyContact.hpp"
+#include "geom/CPContact.hpp"
+#include "geom/SeparatingAxis.hpp"
+#include <cmath>
+
+namespace woven {
+
+namespace {
+Vec3 meanPoint(const BoxContact& c, const Vec3& fallback) {
+  if (c.nPoints == 0) return fallback;
+  Vec3 p = Vec3::Zero();
+  for (int k = 0; k < c.nPoints; ++k) p += 0.5 * (c.points[k].onA + c.points[k].onB);
+  return p / c.nPoints;
+}
+
+bool boxContact(const Fabric& f, const OBB& cpBox, Index cp, const RigidBody& body, int part, Real dt, Real margin,
+                BodyContact& out) {
+  const OBB box = body.partBox(part);
+  const BoxContact c = obbContact(cpBox, box, 0, 1, true);
+  if (c.overlap) {
+    out.normal = c.normal;
+    out.gap = margin - c.depth;  // the CP's box carries the margin, the body's does not
+    out.point = meanPoint(c, cpBox.centre);
+    out.s = alongCP(f, cp, out.point);
+    out.time = 0;
+    return true;
+  }
+  if (!(dt > 0)) return false;
+  const Vec3 vb = body.velocityAt(box.centre);
+  const Index i = f.elem0[cp];
+  bool hit = false;
+  for (Index k : {i, i + 1}) {  // either node's velocity brackets a CP that turns in the step
+    const SweptContact sw = obbFirstContact(cpBox, f.vel[k], box, vb, dt);
+    if (!sw.hit || (hit && sw.time >= out.time)) continue;
+    hit = true;
+    out.time = sw.time;
+    out.normal = sw.contact.normal;
+    // Back to the start of the step: the CP has not moved yet.
+    out.point = meanPoint(sw.contact, cpBox.centre) - sw.time * f.vel[k];
+    out.gap = std::max(Real(0), -(vb - f.vel[k]).dot(out.normal) * sw.time) + margin;
+  }
+  if (hit) out.s = alongCP(f, cp, out.point);
+  return hit;
+}
+
+bool sphereContact(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
+                   BodyContact& out) {
+  const Vec3 c = body.partCentre(part);
+  const Real R = body.parts[part].radius;
+  const Index i = f.elem0[cp], j = i + 1;
+  const Real s = alongCP(f, cp, c);
+  const Vec3 axis = f.pos[j] - f.pos[i];
+  const Vec3 q = f.pos[i] + s * axis;
+  const Vec3 r = c - q;
+  const Real dist = r.norm();
+  const Vec3 t = axis.normalized();
+  Vec3 d = (1 - s) * f.secDir[i] + s * (f.secDir[i].dot(f.secDir[j]) < 0 ? Vec3(-f.secDir[j]) : f.secDir[j]);
+  d = (d - d.dot(t) * t).normalized();
+  const Vec3 n = dist > 1e-12 * R ? Vec3(r / dist) : d;
+  const SemiAxes si = semiAxes(f.secRadius[i], f.secFlat[i], rule), sj = semiAxes(f.secRadius[j], f.secFlat[j], rule);
+  const Real support = ellipseSupport(t.cross(d), d, (1 - s) * si.a + s * sj.a, (1 - s) * si.b + s * sj.b, n);
+  const Real gap = dist - R - support;
+  const Vec3 point = q + (support + 0.5 * gap) * n;
+  const Real vn = (body.velocityAt(point) - ((1 - s) * f.vel[i] + s * f.vel[j])).dot(n);  // < 0 approaching
+  const Real reach = margin + (vn < 0 ? -vn * dt : 0.0);
+  if (!(gap <= reach)) return false;
+  out.normal = n;
+  out.gap = gap;
+  out.point = point;
+  out.s = s;
+  out.time = gap > margin ? (gap - margin) / -vn : 0.0;
+  return true;
+}
+}  // namespace
+
+bool cpBodyContact(const Fabric& f, const OBB& cpBox, Index cp, const RigidBody& body, int part, Real dt, Real margin,
+                   SectionRule rule, BodyContact& out) {
+  out.cp = cp, out.part = part;
+  return body.parts[part].type == RigidPart::Type::Box ? boxContact(f, cpBox, cp, body, part, dt, margin, out)
+                                                       : sphereContact(f, cp, body, part, dt, margin, rule, out);
+}
+
+}  // namespace woven

@@ -1,0 +1,71 @@
+// Rigid bodies the fabric collides with: proxies of YADE bodies (a projectile, clamps). YADE owns
+// and integrates them; each step the engine adapter copies in their pose and velocities and copies
+// out the velocity changes of the impulses (py/woven/coupling.py), so the exchange costs in
+// proportion to the number of bodies, never the number of nodes.
+//
+// A body is a set of parts (one for a Box or a Sphere, one per member for a YADE clump) fixed in the
+// body frame. Mass and principal inertia as YADE's State: `inertia` is the diagonal of the inertia
+// tensor in the body's principal frame, `ori` turns that frame into the global one.
+#pragma once
+#include "bound/OBB.hpp"
+#include "core/Types.hpp"
+#include <Eigen/Geometry>
+#include <vector>
+
+namespace woven {
+
+using Quat = Eigen::Quaternion<Real>;
+
+struct RigidPart {
+  enum class Type : std::uint8_t { Box = 0, Sphere = 1 };
+  Type type = Type::Box;
+  Vec3 halfSize = Vec3::Zero();  ///< box half-extents in the part frame [m] (YADE Box.extents)
+  Real radius = 0;               ///< sphere radius [m]
+  Vec3 offset = Vec3::Zero();    ///< part centre in the body frame [m]
+  Quat ori = Quat::Identity();   ///< part frame in the body frame
+};
+
+struct RigidBody {
+  long id = -1;                  ///< the YADE body id (for the adapter; woven does not use it)
+  std::vector<RigidPart> parts;
+  Real mass = 0;                 ///< [kg]; 0 (or inf): kinematic, impulses do not change its motion
+  Vec3 inertia = Vec3::Zero();   ///< principal moments [kg m^2] (0 on an axis: no rotation about it)
+  Vec3 pos = Vec3::Zero();       ///< centre of mass [m]
+  Quat ori = Quat::Identity();
+  Vec3 vel = Vec3::Zero();       ///< [m/s]
+  Vec3 angVel = Vec3::Zero();    ///< [rad/s], global frame
+
+  bool dynamic() const { return mass > 0 && std::isfinite(mass); }
+  Real invMass() const { return dynamic() ? 1 / mass : 0.0; }
+  /// Inverse inertia tensor in the global frame [1/(kg m^2)].
+  Mat3 invInertiaWorld() const {
+    if (!dynamic()) return Mat3::Zero();
+    Vec3 d;
+    for (int k = 0; k < 3; ++k) d[k] = inertia[k] > 0 && std::isfinite(inertia[k]) ? 1 / inertia[k] : 0.0;
+    const Mat3 R = ori.toRotationMatrix();
+    return R * d.asDiagonal() * R.transpose();
+  }
+  /// Velocity of the body's material point at p [m/s].
+  Vec3 velocityAt(const Vec3& p) const { return vel + angVel.cross(p - pos); }
+  /// Part k in the global frame: its centre and axes.
+  Vec3 partCentre(std::size_t k) const { return pos + ori * parts[k].offset; }
+  Mat3 partAxes(std::size_t k) const { return (ori * parts[k].ori).toRotationMatrix(); }
+  /// The OBB of a box part, or the cube around a sphere part (for the broad phase).
+  OBB partBox(std::size_t k) const {
+    OBB b;
+    b.centre = partCentre(k);
+    b.axes = partAxes(k);
+    b.extent = parts[k].type == RigidPart::Type::Box ? parts[k].halfSize : Vec3::Constant(parts[k].radius);
+    return b;
+  }
+  /// Kinetic energy 1/2 m v^2 + 1/2 w . I w [J] (0 for a kinematic body).
+  Real kineticEnergy() const {
+    if (!dynamic()) return 0;
+    const Vec3 wl = ori.conjugate() * angVel;
+    return 0.5 * mass * vel.squaredNorm() + 0.5 * wl.dot(inertia.cwiseProduct(wl));
+  }
+  /// Throws ParameterError naming the field ("mass", "inertia", "parts", ...) and its range.
+  void validate() const;
+};
+
+}  // namespace woven

@@ -1,0 +1,343 @@
+# Ballistic impact of a rigid projectile on a single ply (paper Sec. 6.2), run inside YADE's loop.
+#   yade -n -x scripts/ballistic.py [V=200] [shape=box|sphere] [mass=1.1e-3] [size=5.59e-3] [side=0.0508]
+#                                   [clamp=4] [t_end=1e-4] [state=FILE] [vtk_every=N] [out=DIR] ...
+# The fabric (default KM2 style 706, a 50.8 x 50.8 mm single ply, clamped on its 4 edges) is built,
+# its sections settled; the projectile is an ordinary YADE body (a cube of edge `size` face on, or a
+# sphere of diameter `size`) coupled to the fabric (woven.coupling), `standoff` above its top surface,
+# moving at V normal to it. YADE's NewtonIntegrator moves the projectile; the woven engine resolves its
+# contacts with the yarns (impulses on both sides) and breaks elements past the failure strain.
+# The run stops at t_end, or once the projectile has perforated (below the ply, out of contact for
+# `clear_steps` steps) or been arrested (moving back).
+# Output (out/ballistic/): series.csv and yade.plot data (series.txt), ballistic.png, breaks.csv,
+# vtk/frames.pvd with yarn tubes and the projectile every vtk_every steps, summary.json.
+import math
+import os
+import sys
+import time
+
+import numpy as np
+import woven
+from woven.params import read_params
+from woven.output import out_dir, write_summary
+from woven.weave import WEAVE_KEYS
+from woven.contact import CONTACT_KEYS
+from yade import plot, utils
+
+defaults = dict(WEAVE_KEYS)
+defaults.update({
+    'nx': (0, '', 'repeats along x (0: from side)'), 'ny': (0, '', 'repeats along y (0: from side)'),
+    'cp_per_span': (2, '', WEAVE_KEYS['cp_per_span'][2]),
+})
+defaults.update(CONTACT_KEYS)
+defaults.update({
+    'position_correction': (0.0, '', 'fraction of a locked overlap removed per step; 0 keeps the energy books closed'),
+    'side': (0.0508, 'm', 'side of the square ply (yarns = side / spacing, rounded to whole pattern repeats)'),
+    'clamp': (4, '', 'edges held: 4 (every yarn end), 2 (warp ends only), 0 (free)'),
+    'state': ('', '', 'initial state file of the same weave (e.g. pretensioned.state of tension.py); empty: at rest'),
+    'V': (200.0, 'm/s', 'impact speed, normal to the ply'),
+    'shape': ('box', '', "'box' (a cube, face on, as the paper's OBB-bounded projectile) or 'sphere'"),
+    'mass': (1.1e-3, 'kg', 'projectile mass (default: a 0.22-calibre, 17-grain fragment simulator)'),
+    'size': (5.59e-3, 'm', 'cube edge or sphere diameter (default: 0.22 calibre)'),
+    'standoff': (0.05e-3, 'm', 'gap between the projectile and the top of the ply at the start'),
+    't_end': (1e-4, 's', 'simulated time at most'),
+    'stop': (True, '', 'stop at perforation or arrest (else run to t_end)'),
+    'clear_steps': (200, '', 'steps out of contact below the ply that count as perforated'),
+    'break_strain': (0.0, '', 'failure strain in (0, 10]; 0: the material failure strain (KM2: 5 %)'),
+    'break_filter': (1e-3, 'm', 'strain filter length: tau = break_filter / c (0: raw element strain)'),
+    'weibull_m': (0.0, '', 'Weibull modulus of yarn strength (0: none; else [1, 100])'),
+    'seed': (1, '', 'seed of the Weibull draw'),
+    'safety': (0.7, '', 'O.dt = safety * dt_crit'),
+    'samples': (400, '', 'rows of the time series at most'),
+    'vtk_every': (0, '', 'write VTK frames every this many steps (0: first and last frame only; -1: none)'),
+    'vtk_rings': (8, '', 'points per section ellipse in the VTK tubes'),
+    'mirror_every': (0, '', 'copy the yarn nodes into YADE sphere bodies every this many steps (0: off)'),
+    'progress': (5.0, 's', 'wall time between progress lines (0: none)'),
+    'energy_limit': (0.01, '', 'allowed energy-balance error / initial kinetic energy'),
+    'out': ('', '', 'output folder (default out/ballistic)'),
+})
+p = read_params(defaults)
+
+# --- input checks: every bad value names its key and the allowed range, before anything is built ---
+def bad(key, allowed):
+    raise ValueError('%s = %r is invalid: allowed %s' % (key, p[key], allowed))
+
+
+if not (math.isfinite(p.V) and 0 < p.V <= 5000):
+    bad('V', '(0, 5000] m/s, finite')
+if p.shape not in ('box', 'sphere'):
+    bad('shape', "'box' or 'sphere'")
+if not (math.isfinite(p.mass) and p.mass > 0):
+    bad('mass', '(0, inf) kg')
+if not (math.isfinite(p.size) and p.size > 0):
+    bad('size', '(0, inf) m')
+if not (math.isfinite(p.side) and p.side > 0):
+    bad('side', '(0, inf) m')
+if p.clamp not in (0, 2, 4):
+    bad('clamp', '4, 2 or 0 edges')
+if not (math.isfinite(p.standoff) and p.standoff > 0):
+    bad('standoff', '(0, inf) m: the projectile starts clear of the ply')
+if not (math.isfinite(p.t_end) and p.t_end > 0):
+    bad('t_end', '(0, inf) s')
+if not (0 < p.safety <= 1):
+    bad('safety', '(0, 1]')
+if p.samples < 10:
+    bad('samples', '[10, inf)')
+if not (0 < p.energy_limit < 1):
+    bad('energy_limit', '(0, 1)')
+if p.vtk_every < -1:
+    bad('vtk_every', '-1 (none), 0 (first and last) or a step count')
+if p.mirror_every < 0:
+    bad('mirror_every', '0 (off) or a step count')
+d = out_dir('ballistic', p)
+
+# --- the ply ---
+weave_args = {k: p[k] for k in WEAVE_KEYS}
+pat = woven.pattern(p.pattern, p.twill_over, p.twill_under, p.satin_n, p.satin_step, p.basket_n)
+probe = woven.weave(**dict(weave_args, nx=1, ny=1))
+spacing_x = probe.summary['length_x'] / len(probe.weft_yarns)
+spacing_y = probe.summary['length_y'] / len(probe.warp_yarns)
+if p.nx <= 0:
+    weave_args['nx'] = max(1, int(round(p.side / spacing_x / pat.cols)))
+if p.ny <= 0:
+    weave_args['ny'] = max(1, int(round(p.side / spacing_y / pat.rows)))
+w = woven.weave(**weave_args)
+eng = w.engine
+woven.contact.enable(eng, **{k: p[k] for k in CONTACT_KEYS})
+settle_left = eng.settle_sections()
+if p.state:
+    eng.load_state(p.state)
+ends = {}
+for y in w.warp_yarns + w.weft_yarns:
+    info = eng.yarn(y)
+    ends[y] = (info['first_node'], info['first_node'] + info['n_nodes'] - 1)
+held = w.warp_yarns + w.weft_yarns if p.clamp == 4 else (w.warp_yarns if p.clamp == 2 else [])
+for y in held:
+    eng.fix(ends[y][0])
+    eng.fix(ends[y][1])
+eng.enable_breakage(strain=p.break_strain, filter_length=p.break_filter, weibull_m=p.weibull_m, seed=p.seed)
+
+X0 = woven.positions(eng).copy()
+thickness = max(eng.yarn(y)['thickness'] for y in (w.warp_yarns[0], w.weft_yarns[0]))
+centre = X0.mean(axis=0)
+z_mid = float(np.median(X0[:, 2]))
+ab0 = woven.section_semi_axes(eng)
+z_top = float(np.max(X0[:, 2] + ab0[:, 0]))  # above every section, whatever its turn
+
+# --- the projectile: an ordinary YADE body ---
+O.engines = []
+O.bodies.clear()
+half = 0.5 * p.size
+start = (centre[0], centre[1], z_top + half + p.standoff)
+if p.shape == 'box':
+    body = utils.box(start, (half, half, half), fixed=False)
+    inertia = p.mass * p.size ** 2 / 6  # cube about its centre
+else:
+    body = utils.sphere(start, half, fixed=False)
+    inertia = 0.4 * p.mass * half ** 2
+body.mask = 0  # no YADE contacts with the mirrored yarn bodies
+pid = O.bodies.append(body)
+proj = O.bodies[pid]
+proj.state.mass = p.mass
+proj.state.inertia = Vector3(inertia, inertia, inertia)
+proj.state.vel = Vector3(0, 0, -p.V)
+woven.coupling.couple(eng, [pid])  # refuses a projectile that starts inside the ply
+
+O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
+woven.attach(eng, set_dt=True, safety=p.safety)
+steps_max = int(math.ceil(p.t_end / O.dt))
+every = max(1, steps_max // p.samples)
+KE0 = 0.5 * p.mass * p.V ** 2
+E0 = eng.energy()
+fabric_initial = E0['initial']
+
+# --- mirror into YADE bodies (off by default): YADE's 3D view and VTKRecorder then show the yarns ---
+mirror_ids = []
+if p.mirror_every > 0:
+    r0 = 0.5 * thickness
+    for x in X0:
+        b = utils.sphere(tuple(x), r0, fixed=True)
+        b.mask = 0
+        mirror_ids.append(O.bodies.append(b))
+
+
+def mirror():
+    X = woven.positions(eng)
+    for i, bid in enumerate(mirror_ids):
+        O.bodies[bid].state.pos = Vector3(*X[i])
+
+
+state = {'contact_seen': False, 'clear': 0, 'outcome': 'running', 'min_nose': float('inf'), 'wall0': time.time(),
+         'last_progress': time.time(), 'mirror_seconds': 0.0}
+rows = []
+
+
+def nose_z():
+    return proj.state.pos[2] - (half if p.shape == 'box' else half)
+
+
+def sample():
+    E = eng.energy()
+    s = eng.collision_stats()
+    vz = proj.state.vel[2]
+    ke_p = 0.5 * p.mass * proj.state.vel.squaredNorm()
+    dissipated = E['contact']
+    row = dict(t=O.time, vz=vz, z=proj.state.pos[2], ke_projectile=ke_p, ke_fabric=E['kinetic'], elastic=E['elastic'],
+               dissipated_impulses=dissipated, damped=E['damped'], released=E['released'],
+               contacts=s['contacts'], body_contacts=s['body_contacts'], broken=eng.broken_elements,
+               balance=(ke_p + E['kinetic'] + E['elastic'] + E['damped'] + dissipated + E['released']
+                        - KE0 - fabric_initial - (E['work'] - E['body_work'])) / KE0)
+    rows.append(row)
+    plot.addData(**row)
+
+
+def watch():
+    """Every step: deepest nose position, perforation / arrest, progress line, mirror."""
+    s = eng.collision_stats()
+    state['min_nose'] = min(state['min_nose'], nose_z())
+    if s['body_contacts'] > 0:
+        state['contact_seen'] = True
+        state['clear'] = 0
+    else:
+        state['clear'] += 1
+    rear = proj.state.pos[2] + half
+    if state['contact_seen'] and state['clear'] >= p.clear_steps and rear < z_mid - thickness:
+        state['outcome'] = 'perforated'
+    elif state['contact_seen'] and proj.state.vel[2] >= 0:
+        state['outcome'] = 'arrested'
+    if p.mirror_every > 0 and O.iter % p.mirror_every == 0:
+        t0 = time.time()
+        mirror()
+        state['mirror_seconds'] += time.time() - t0
+    if p.progress > 0 and time.time() - state['last_progress'] >= p.progress:
+        state['last_progress'] = time.time()
+        print('ballistic: t = %.2f us of %.2f, vz = %.1f m/s, contacts %d (projectile %d), broken %d, wall %.0f s'
+              % (O.time * 1e6, p.t_end * 1e6, proj.state.vel[2], s['contacts'], s['body_contacts'],
+                 eng.broken_elements, time.time() - state['wall0']))
+        sys.stdout.flush()
+    if p.stop and state['outcome'] != 'running':
+        O.pause()
+
+
+vtk_rec = None
+if p.vtk_every >= 0:
+    from woven.vtk_output import Recorder
+    vtk_rec = Recorder(os.path.join(d, 'vtk'), eng, rings=p.vtk_rings)
+    vtk_rec.write(0.0)
+
+
+def vtk_frame():
+    vtk_rec.write(O.time)
+
+
+import __main__
+__main__.sample, __main__.watch, __main__.vtk_frame = sample, watch, vtk_frame
+O.engines = O.engines + [PyRunner(command='watch()', iterPeriod=1), PyRunner(command='sample()', iterPeriod=every)]
+if vtk_rec is not None and p.vtk_every > 0:
+    O.engines = O.engines + [PyRunner(command='vtk_frame()', iterPeriod=p.vtk_every)]
+
+status = 'ok'
+wall0 = time.time()
+try:
+    O.run(steps_max, True)
+except RuntimeError as ex:
+    status = 'unstable' if isinstance(woven.engine.last_error, woven.InstabilityError) else 'failed'
+    print('ballistic: run stopped:', woven.engine.last_error or ex)
+    eng.save_state(os.path.join(d, 'last_good.state'), last_good=True)
+wall = time.time() - wall0
+if state['outcome'] == 'running':
+    state['outcome'] = 'no perforation by t_end'
+sample()
+if vtk_rec is not None:
+    vtk_rec.write(O.time)
+
+# --- results ---
+E = eng.energy()
+stats = eng.collision_stats()
+v_res = -proj.state.vel[2]
+ke_p = 0.5 * p.mass * proj.state.vel.squaredNorm()
+absorbed = KE0 - ke_p
+balance = rows[-1]['balance']
+perforated = state['outcome'] == 'perforated'
+keys = list(rows[0].keys())
+S = np.array([[r[k] for k in keys] for r in rows])
+np.savetxt(os.path.join(d, 'series.csv'), S, delimiter=',', comments='', header=','.join(keys))
+plot.saveDataTxt(os.path.join(d, 'series.txt'))
+log = eng.break_log()
+with open(os.path.join(d, 'breaks.csv'), 'w') as f:
+    f.write('time_s,step,yarn,element,x_m,y_m,z_m,filtered_strain,raw_strain,energy_J\n')
+    for b in log:
+        f.write('%.9g,%d,%d,%d,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g\n' % (b['time'], b['step'], b['yarn'], b['element'],
+                b['position'][0], b['position'][1], b['position'][2], b['strain'], b['raw_strain'], b['energy']))
+
+cp_steps = eng.n_elements * O.iter
+phases = {k[8:]: stats[k] for k in stats if k.startswith('seconds_')}
+phases['integration_and_rest'] = max(0.0, wall - sum(phases.values()))
+measured = {
+    'outcome': state['outcome'], 'perforated': perforated,
+    'residual_velocity': v_res if perforated else 0.0, 'projectile_velocity_end': v_res,
+    'absorbed_energy': absorbed, 'energy_balance_error': balance,
+    'max_penetration': z_mid - state['min_nose'],
+    'broken_elements': eng.broken_elements, 'broken_yarns': eng.broken_yarns,
+    'first_break_time': log[0]['time'] if log else None,
+    'simulated_time': O.time, 'steps': O.iter, 'dt': O.dt, 'yarns': eng.n_yarns, 'cps': eng.n_elements,
+    'wall_seconds': wall, 'cp_steps_per_second': cp_steps / wall if wall > 0 else None,
+    'phase_seconds': phases, 'mirror_seconds': state['mirror_seconds'],
+    'energy': {'projectile_initial': KE0, 'projectile_final': ke_p, 'fabric_kinetic': E['kinetic'],
+               'fabric_elastic': E['elastic'], 'dissipated_impulses': E['contact'], 'damped': E['damped'],
+               'released_breakage': E['released'], 'fabric_initial': fabric_initial},
+    'max_body_penetration': stats['max_body_penetration'], 'max_yarn_penetration': stats['max_penetration'],
+    'settle_overlap': settle_left,
+}
+info = eng.yarn(w.warp_yarns[0])
+reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-reference.md (Nilakantan et al.)
+             'smith_strain_at_V': woven.theory.smith(p.V, info['E'], info['rho'])['strain'],
+             'smith_critical_velocity': woven.theory.smith_critical_velocity(p.break_strain or info['failure_strain'],
+                                                                            info['E'], info['rho']),
+             'failure_strain': p.break_strain or info['failure_strain']}
+units = {'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
+         'simulated_time': 's', 'dt': 's', 'wall_seconds': 's', 'cp_steps_per_second': '1/s', 'phase_seconds': 's',
+         'energy': 'J', 'energy_balance_error': 'fraction of the projectile\'s initial kinetic energy',
+         'max_body_penetration': 'm', 'max_yarn_penetration': 'm', 'first_break_time': 's', 'mirror_seconds': 's'}
+checks = {'energy_balance': {'value': balance, 'limit': p.energy_limit, 'passed': bool(abs(balance) <= p.energy_limit),
+                             'what': '(final kinetic + elastic + dissipated + released - initial) / initial kinetic energy'},
+          'momentum_direction': {'value': v_res, 'limit': p.V, 'passed': bool(v_res <= p.V * (1 + 1e-9)),
+                                 'what': 'the fabric only slows the projectile'}}
+
+import matplotlib
+matplotlib.use('Agg')
+import matplotlib.pyplot as plt
+col = {k: i for i, k in enumerate(keys)}
+t_us = S[:, col['t']] * 1e6
+fig, ax = plt.subplots(2, 2, figsize=(12, 8))
+ax[0, 0].plot(t_us, -S[:, col['vz']], 'k-')
+ax[0, 0].set_ylabel('projectile velocity [m/s]')
+ax[0, 0].set_title('%s %.3g g at %.0f m/s: %s' % (p.shape, p.mass * 1e3, p.V, state['outcome']))
+for k, lab in (('ke_projectile', 'projectile kinetic'), ('ke_fabric', 'fabric kinetic'), ('elastic', 'fabric elastic'),
+               ('dissipated_impulses', 'dissipated by impulses'), ('released', 'released by breakage')):
+    ax[0, 1].plot(t_us, S[:, col[k]], label=lab)
+ax[0, 1].set_ylabel('energy [J]')
+ax[0, 1].legend(fontsize=8)
+ax[1, 0].plot(t_us, S[:, col['contacts']], label='yarn-yarn contacts')
+ax[1, 0].plot(t_us, S[:, col['body_contacts']], label='projectile contacts')
+ax[1, 0].plot(t_us, S[:, col['broken']], label='broken elements')
+ax[1, 0].legend(fontsize=8)
+ax[1, 0].set_xlabel('time [us]')
+ax[1, 1].plot(t_us, 100 * S[:, col['balance']], 'r-')
+ax[1, 1].set_ylabel('energy balance error [% of initial kinetic]')
+ax[1, 1].set_xlabel('time [us]')
+fig.tight_layout()
+fig.savefig(os.path.join(d, 'ballistic.png'), dpi=100)
+
+if status == 'ok' and not all(c['passed'] for c in checks.values()):
+    status = 'failed'
+write_summary(d, 'ballistic', p, measured, reference, units, status, checks)
+if perforated:
+    what = 'perforated, residual velocity %.1f m/s' % v_res
+else:
+    what = '%s: the projectile did not perforate (velocity %.1f m/s at t = %.1f us, deepest %.2f mm)' % (
+        state['outcome'], v_res, O.time * 1e6, 1e3 * measured['max_penetration'])
+print('ballistic: %s; %s; absorbed %.4g J, energy balance error %.2g %%, broken %d elements in %d yarns; '
+      '%.1f us in %.1f s (%.3g CP-steps/s) -> %s' % (status, what, absorbed, 100 * balance, eng.broken_elements,
+                                                   eng.broken_yarns, O.time * 1e6, wall, cp_steps / max(wall, 1e-9), d))
+if status != 'ok':
+    sys.exit(1)
