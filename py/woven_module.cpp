@@ -279,6 +279,9 @@ void yadeStep(FabricEngine& e, Real dt, bp::object yadeBodies, bool rewind) {
       s.attr("ori") = b.ori;
       s.attr("vel") = b.vel;
       s.attr("angVel") = b.angVel;
+      // YADE integrates an aspherical body (a clump) through its angular momentum: keep them together.
+      const Vec3 wl = b.ori.conjugate() * b.angVel;
+      s.attr("angMom") = Vec3(b.ori * Vec3(b.inertia.cwiseProduct(wl)));
     }
   }
 }

@@ -1,0 +1,146 @@
+"""Ballistic impact: the scene's output contract and energy balance, VTK files read back, YADE bodies
+coupled through the engine (momentum with YADE's own state, clumps), bad input, the V50 collector."""
+import json
+import math
+import os
+
+import numpy as np
+import pytest
+from conftest import run_scene
+
+
+def test_small_impact_balances_energy_and_writes_vtk(tmp_path):
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.008', 't_end=2e-5', 'vtk_every=200', 'samples=50',
+                           'progress=0')
+    assert rc == 0, log
+    m = s['measured']
+    assert s['status'] == 'ok'
+    assert abs(m['energy_balance_error']) < 0.01  # issue: closed within 1 % of the initial kinetic energy
+    assert m['absorbed_energy'] > 0 and m['max_penetration'] > 0
+    for k in ('residual_velocity', 'absorbed_energy', 'energy_balance_error', 'max_penetration', 'broken_elements',
+              'broken_yarns'):
+        assert k in m
+    series = np.genfromtxt(tmp_path / 'series.csv', delimiter=',', names=True)
+    assert len(series) > 10 and series['vz'][0] == pytest.approx(-200, rel=1e-3)
+    assert os.path.getsize(tmp_path / 'ballistic.png') > 10000
+    assert os.path.exists(tmp_path / 'series.txt') and os.path.exists(tmp_path / 'breaks.csv')
+    # VTK: yarn tubes (rings of 8 points per node, quads per whole CP) and the cube (a closed surface)
+    from woven.vtk_output import read
+    pvd = open(tmp_path / 'vtk' / 'frames.pvd').read()
+    assert pvd.count('<DataSet') >= 4
+    last = sorted(p for p in os.listdir(tmp_path / 'vtk') if p.startswith('yarns_'))[-1]
+    poly = read(str(tmp_path / 'vtk' / last))
+    assert poly.GetNumberOfPoints() % 8 == 0 and poly.GetNumberOfPoints() > 0
+    cps, broken = m['cps'], m['broken_elements']
+    assert poly.GetNumberOfCells() == 8 * (cps - broken)
+    assert poly.GetCellData().GetArray('strain') is not None
+    body = read(str(tmp_path / 'vtk' / last.replace('yarns_', 'bodies_')))
+    b = body.GetBounds()
+    assert b[1] - b[0] == pytest.approx(5.59e-3, rel=1e-4)  # the cube's edge (float32 points, a slight turn)
+
+
+def test_no_perforation_is_reported_clearly(tmp_path):
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.008', 't_end=5e-6', 'V=20', 'vtk_every=-1',
+                           'progress=0')
+    assert rc == 0, log
+    m = s['measured']
+    assert m['perforated'] is False and m['residual_velocity'] == 0.0
+    assert 'no perforation' in m['outcome'] or m['outcome'] == 'arrested'
+    assert 'did not perforate' in log
+
+
+@pytest.mark.parametrize('args,key', [(['mass=0'], 'mass'), (['mass=-1'], 'mass'), (['V=nan'], 'V'),
+                                      (['V=inf'], 'V'), (['shape=cone'], 'shape'), (['standoff=-1e-3'], 'standoff'),
+                                      (['clamp=3'], 'clamp')])
+def test_bad_input_names_the_key(tmp_path, args, key):
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', *args)
+    assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log
+
+
+def _plate(yade_ns, side_repeats=3):
+    import woven
+    w = woven.weave(preset='km2_706', nx=side_repeats, ny=side_repeats, cp_per_span=2)
+    e = w.engine
+    woven.contact.enable(e, position_correction=0)
+    e.settle_sections()
+    return w, e
+
+
+def test_projectile_inside_the_fabric_is_refused(yade_ns):
+    import woven
+    from yade import utils
+    O = yade_ns.O
+    O.reset()
+    w, e = _plate(yade_ns)
+    X = woven.positions(e)
+    c = X.mean(axis=0)
+    bid = O.bodies.append(utils.sphere(tuple(c), 1e-3))
+    with pytest.raises(ValueError, match='starts inside the fabric'):
+        woven.coupling.couple(e, [bid])
+    assert e.n_bodies == 0
+    O.bodies[bid].state.vel = yade_ns.Vector3(0, 0, float('nan'))
+    with pytest.raises(ValueError, match='vel = .* is invalid'):
+        woven.coupling.couple(e, [bid])
+
+
+def test_clump_hits_off_centre_and_yade_state_follows(yade_ns):
+    """A clump of two spheres, one of them over the ply's centre, hits at 100 m/s: YADE's own state
+    (read back from O.bodies) carries the momentum the yarns took, and the clump turns."""
+    import woven
+    from yade import utils, Vector3
+    O = yade_ns.O
+    O.reset()
+    O.engines = []
+    w, e = _plate(yade_ns)
+    X = woven.positions(e)
+    c = X.mean(axis=0)
+    top = X[:, 2].max() + 0.4e-3
+    r = 0.5e-3
+    ids = [O.bodies.append(utils.sphere((c[0] + dx, c[1], top + r), r)) for dx in (0.0, 2.2e-3)]
+    cid = O.bodies.clump(ids)
+    clump = O.bodies[cid]
+    clump.state.vel = Vector3(0, 0, -100)
+    woven.coupling.couple(e, [cid])
+    O.engines = [yade_ns.wrapper.ForceResetter(), yade_ns.wrapper.NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
+    woven.attach(e)
+    m = clump.state.mass
+    p0 = m * clump.state.vel[2]
+    O.run(600, True)
+    vf = woven.velocities(e)
+    masses = woven.masses(e)
+    kin = np.array([e.is_kinematic(i) for i in range(e.n_nodes)])
+    # free nodes' momentum plus the clump's: what it lost went to the yarns and the clamps (none here)
+    p = m * clump.state.vel[2] + float(np.sum(masses[~kin] * vf[~kin, 2]))
+    assert clump.state.vel[2] > -100 + 1e-3  # slowed
+    assert p == pytest.approx(p0, rel=1e-6)
+    assert abs(clump.state.angVel[1]) > 1.0  # the hit member is off the clump's centre: it turns
+    # Measured 0.09 mm at the member that lands on the free yarn ends at the ply's edge while the clump
+    # spins at 7000 rad/s (docs/ballistic.md, limits): below the yarn thickness, not a pass-through.
+    assert e.collision_stats()['max_body_penetration'] < 0.11e-3
+
+
+def test_mirror_and_v50_collector(tmp_path):
+    # mirror: the ply's nodes become YADE spheres (cost reported in the summary)
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', 't_end=2e-6', 'mirror_every=20', 'vtk_every=-1',
+                           'progress=0')
+    assert rc == 0, log
+    assert s['measured']['mirror_seconds'] > 0
+    # the collector recovers a known Lambert-Jonas curve from summaries shaped like the scene's
+    import woven
+    runs = tmp_path / 'runs'
+    for i, V in enumerate([50, 70, 90, 110, 130, 160, 200, 260]):
+        vr = float(woven.theory.lambert_jonas(V, 95.0, 0.85, 2.0))
+        os.makedirs(runs / ('r%d' % i))
+        json.dump({'scene': 'ballistic', 'parameters': {'V': V, 'seed': 1, 'weibull_m': 0},
+                   'measured': {'residual_velocity': vr, 'perforated': vr > 0, 'energy_balance_error': 0.0,
+                                'broken_elements': 0}}, open(runs / ('r%d' % i) / 'summary.json', 'w'))
+    out = tmp_path / 'v50'
+    import subprocess
+    from conftest import ROOT
+    r = subprocess.run(['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'v50.py'), 'runs=%s' % runs, 'out=%s' % out],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
+    s = json.load(open(out / 'summary.json'))
+    assert s['measured']['V50'] == pytest.approx(95.0, rel=0.01)
+    assert s['measured']['lambert_jonas_p'] == pytest.approx(2.0, rel=0.05)
+    assert os.path.getsize(out / 'v50.png') > 10000 and os.path.exists(out / 'v50.csv')
