@@ -168,7 +168,7 @@ CollisionStage& stageOf(FabricEngine& e) {
 bp::dict collisionStats(FabricEngine& e) {
   const CollisionStats& s = stageOf(e).stats;
   bp::dict d;
-  d["steps"] = s.steps, d["broad_phases"] = s.broadPhases, d["candidates"] = s.candidates, d["contacts"] = s.contacts, d["moving"] = s.moving;
+  d["steps"] = s.steps, d["broad_phases"] = s.broadPhases, d["partial_broad_phases"] = s.partialBroadPhases, d["candidates"] = s.candidates, d["contacts"] = s.contacts, d["moving"] = s.moving;
   d["flattened"] = s.flattened, d["flatten_passes"] = s.flattenPasses;
   d["impulse_rows"] = s.impulses.rows, d["iterations"] = s.impulses.iterations, d["residual"] = s.impulses.residual;
   d["unresolved"] = s.impulses.unresolved, d["penetration"] = s.penetration, d["max_penetration"] = s.maxPenetration;

@@ -126,7 +126,7 @@ void YarnTreeCollider::descend(const Fabric& f, Index p, Index q, const PairFilt
 }
 
 void YarnTreeCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const PairFilter& filter,
-                               std::vector<CPPair>& pairs) {
+                               std::vector<CPPair>& pairs, const std::vector<std::uint8_t>* dirty) {
   bool same = layout_.size() == 2 * f.yarns.size();
   for (std::size_t y = 0; same && y < f.yarns.size(); ++y)
     same = layout_[2 * y] == f.yarns[y].firstElem && layout_[2 * y + 1] == f.yarns[y].nElems;
@@ -152,8 +152,10 @@ void YarnTreeCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, c
   std::sort(spans.begin(), spans.end(),
             [](const Span& a, const Span& b) { return a.lo[0] < b.lo[0] || (a.lo[0] == b.lo[0] && a.yarn < b.yarn); });
   for (std::size_t s = 0; s < spans.size(); ++s) {
-    descend(f, root_[spans[s].yarn], root_[spans[s].yarn], filter, pairs);  // self contact of the yarn
+    const bool dirtyS = !dirty || (*dirty)[spans[s].yarn];
+    if (dirtyS) descend(f, root_[spans[s].yarn], root_[spans[s].yarn], filter, pairs);  // self contact of the yarn
     for (std::size_t t = s + 1; t < spans.size() && spans[t].lo[0] <= spans[s].hi[0]; ++t) {
+      if (!dirtyS && !(*dirty)[spans[t].yarn]) continue;
       if (spans[t].lo[1] > spans[s].hi[1] || spans[s].lo[1] > spans[t].hi[1] || spans[t].lo[2] > spans[s].hi[2] ||
           spans[s].lo[2] > spans[t].hi[2])
         continue;

@@ -20,7 +20,9 @@ class YarnTreeCollider {
 
   /// Sorted candidate pairs of CPs whose broad-phase `boxes` overlap (one per CP) into `pairs`.
   /// Builds the trees on the first call or when the fabric's yarn layout changed.
-  void collide(const Fabric& f, const std::vector<OBB>& boxes, const PairFilter& filter, std::vector<CPPair>& pairs);
+  /// With `dirty` (one flag per yarn), only the pairs that involve a flagged yarn are listed.
+  void collide(const Fabric& f, const std::vector<OBB>& boxes, const PairFilter& filter, std::vector<CPPair>& pairs,
+               const std::vector<std::uint8_t>* dirty = nullptr);
 
   struct Stats {
     long rebuiltNodes = 0;   ///< internal nodes whose axes were rebuilt (all of them at the first call)

@@ -1,9 +1,11 @@
 #include "engine/CollisionStage.hpp"
 #include "bound/CPBound.hpp"
 #include "core/Errors.hpp"
+#include "geom/SeparatingAxis.hpp"
 #include "law/SectionFlattening.hpp"
 #include <algorithm>
 #include <chrono>
+#include <iterator>
 #include <cmath>
 #include <thread>
 
@@ -18,6 +20,12 @@ inline double since(Clock::time_point& t) {
   return s;
 }
 }  // namespace
+
+// Both end sections at the MCD: the CP's flattening capacity is 0 along any normal (its reach at the
+// MCD is its reach now), so the capacity need not be computed.
+inline bool lockedCP(const Fabric& f, Index e, Real mcd) {
+  return f.secFlat[f.elem0[e]] >= mcd && f.secFlat[f.elem0[e] + 1] >= mcd;
+}
 
 BroadPhase broadPhaseByName(const std::string& name) {
   if (name == "tree") return BroadPhase::YarnTree;
@@ -59,11 +67,40 @@ bool inside(const OBB& a, const OBB& b) {
 
 // The candidate pairs of the last broad phase hold as long as every CP's box stays inside the box
 // that phase used (its box then, grown by the skin): a pair whose boxes overlap now overlapped then.
+// With the OBB tree, only the yarns with a CP out of its skin box are collided again (their boxes
+// renewed): the pairs between two yarns that stayed inside still hold. Near a projectile that is a
+// few yarns, not the fabric. The contacts are the same as with a full broad phase (the narrow phase
+// decides each pair on its own).
 void CollisionStage::broad(const Fabric& f) {
+  const bool partial = broadPhase == BroadPhase::YarnTree;
   if (pairsValid_ && skinBoxes_.size() == grown_.size()) {
+    dirtyYarn_.assign(f.yarns.size(), 0);
     bool keep = true;
-    for (std::size_t e = 0; keep && e < grown_.size(); ++e) keep = inside(grown_[e], skinBoxes_[e]);
+    for (std::size_t e = 0; e < grown_.size(); ++e) {
+      if (partial && dirtyYarn_[f.elemYarn[e]]) continue;
+      if (!inside(grown_[e], skinBoxes_[e])) {
+        keep = false;
+        if (!partial) break;
+        dirtyYarn_[f.elemYarn[e]] = 1;
+      }
+    }
     if (keep) return;
+    if (partial) {
+      for (std::size_t e = 0; e < grown_.size(); ++e)
+        if (dirtyYarn_[f.elemYarn[e]]) {
+          skinBoxes_[e] = grown_[e];
+          skinBoxes_[e].extent.array() += params_.skin;
+        }
+      keptPairs_.clear();
+      for (const CPPair& q : pairs_)
+        if (!dirtyYarn_[f.elemYarn[q.a]] && !dirtyYarn_[f.elemYarn[q.b]]) keptPairs_.push_back(q);
+      tree.collide(f, skinBoxes_, filter_, freshPairs_, &dirtyYarn_);
+      pairs_.clear();
+      std::merge(keptPairs_.begin(), keptPairs_.end(), freshPairs_.begin(), freshPairs_.end(), std::back_inserter(pairs_));
+      ++stats.broadPhases;
+      ++stats.partialBroadPhases;
+      return;
+    }
   }
   skinBoxes_ = grown_;
   for (OBB& b : skinBoxes_) b.extent.array() += params_.skin;
@@ -86,8 +123,11 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
     for (std::size_t k = n * t / threads; k < n * (t + 1) / threads; ++k) {
       const CPPair& pr = pairs_[k];
       if (!f.alive[pr.a] || !f.alive[pr.b]) continue;  // broken since the broad phase
+      // The moving test only where the boxes grown by the step's motion meet (a yes/no SAT with early
+      // out is far cheaper than its four sweeps, and a pair they keep apart cannot meet in the step).
       if (cpContactStatic(f, bounds_, pr.a, pr.b, params_.margin, params_.rule, c) ||
-          (dt > 0 && cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c)))
+          (dt > 0 && obbOverlap(grown_[pr.a], grown_[pr.b]) &&
+           cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c)))
         out.push_back(c);
     }
   };
@@ -123,6 +163,7 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
     bool any = false;
     for (const CPContact& c : contacts_) {
       if (c.time > 0 || !(c.gap < -tiny)) continue;
+      if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) continue;  // capacity 0: left to the impulses
       const Real need = -c.gap;
       const Real capA = flatteningCapacity(f, tangent_, c.cpA, c.normal, params_, &flatBefore_);
       const Real capB = flatteningCapacity(f, tangent_, c.cpB, c.normal, params_, &flatBefore_);
@@ -176,6 +217,7 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   law_.resolve(
       f, contacts_,
       [&](const CPContact& c) {
+        if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) return Real(0);
         return flatteningCapacity(f, tangent_, c.cpA, c.normal, params_) +
                flatteningCapacity(f, tangent_, c.cpB, c.normal, params_);
       },

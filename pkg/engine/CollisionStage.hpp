@@ -38,6 +38,7 @@ struct CollisionStats {
   // since the start
   long steps = 0;
   long broadPhases = 0;       ///< broad phases run (the other steps reused the pairs: Verlet skin)
+  long partialBroadPhases = 0;  ///< of which only for the yarns that left their skin (OBB tree)
   Real maxPenetration = 0;    ///< [m]
   Real maxBodyPenetration = 0;  ///< [m]
   long maxUnresolved = 0;     ///< most unresolved impulse rows in one step
@@ -115,7 +116,8 @@ class CollisionStage : public StepHook {
   std::vector<BodyContact> bodyContacts_;
   Real bodyWork_ = 0;
   std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per thread
-  std::vector<std::uint8_t> dirty_;
+  std::vector<std::uint8_t> dirty_, dirtyYarn_;
+  std::vector<CPPair> keptPairs_, freshPairs_;
   ImpulseLaw law_;
 };
 
