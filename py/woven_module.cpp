@@ -152,12 +152,12 @@ bool isKinematic(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.d
 void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real mcd, const std::string& rule, Real margin,
                         Real tolerance, int maxIterations, int flattenPasses, Real positionCorrection,
                         Real correctionSlop, Index selfExclude, const std::string& broad, Real skin, int threads,
-                        bool yarnContacts) {
+                        bool yarnContacts, Real cacheDistance) {
   ContactParams p;
   p.restitution = restitution, p.friction = friction, p.mcd = mcd, p.rule = sectionRuleByName(rule);
   p.margin = margin, p.tolerance = tolerance, p.maxIterations = maxIterations, p.flattenPasses = flattenPasses;
   p.positionCorrection = positionCorrection, p.correctionSlop = correctionSlop, p.selfExclude = selfExclude;
-  p.skin = skin, p.threads = threads, p.yarnContacts = yarnContacts;
+  p.skin = skin, p.threads = threads, p.yarnContacts = yarnContacts, p.cacheDistance = cacheDistance;
   e.enableCollisions(p, broadPhaseByName(broad));
 }
 CollisionStage& stageOf(FabricEngine& e) {
@@ -168,7 +168,7 @@ CollisionStage& stageOf(FabricEngine& e) {
 bp::dict collisionStats(FabricEngine& e) {
   const CollisionStats& s = stageOf(e).stats;
   bp::dict d;
-  d["steps"] = s.steps, d["broad_phases"] = s.broadPhases, d["partial_broad_phases"] = s.partialBroadPhases, d["candidates"] = s.candidates, d["contacts"] = s.contacts, d["moving"] = s.moving;
+  d["steps"] = s.steps, d["broad_phases"] = s.broadPhases, d["partial_broad_phases"] = s.partialBroadPhases, d["candidates"] = s.candidates, d["contacts"] = s.contacts, d["moving"] = s.moving, d["cached"] = s.cached;
   d["flattened"] = s.flattened, d["flatten_passes"] = s.flattenPasses;
   d["impulse_rows"] = s.impulses.rows, d["iterations"] = s.impulses.iterations, d["residual"] = s.impulses.residual;
   d["unresolved"] = s.impulses.unresolved, d["penetration"] = s.penetration, d["max_penetration"] = s.maxPenetration;
@@ -475,12 +475,13 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("section_rule") = "constant_area", bp::arg("margin") = 1e-6, bp::arg("tolerance") = 1e-6,
             bp::arg("max_iterations") = 50, bp::arg("flatten_passes") = 4, bp::arg("position_correction") = 0.2,
             bp::arg("correction_slop") = 0.5e-6, bp::arg("self_exclude") = 1, bp::arg("broad_phase") = "tree",
-            bp::arg("skin") = 5e-6, bp::arg("threads") = 1, bp::arg("yarn_contacts") = true),
+            bp::arg("skin") = 5e-6, bp::arg("threads") = 1, bp::arg("yarn_contacts") = true, bp::arg("contact_cache") = 1e-7),
            "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction >= 0, mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
            "in [0, 1] per step, correction_slop [m], broad_phase 'tree' or 'sap', skin [m] >= 0 (Verlet skin of "
            "the broad phase), threads >= 1 (narrow phase; same contacts for any count), yarn_contacts (False: only "
-           "contacts with rigid bodies). See woven.contact.")
+           "contacts with rigid bodies), contact_cache [m] >= 0 (a contact is carried while its nodes move "
+           "together to within this; 0: off). See woven.contact.")
       .def("disable_collisions", +[](FabricEngine& e) { e.disableCollisions(); })
       .add_property("collisions_enabled", +[](FabricEngine& e) { return e.collisions() != nullptr; })
       .def("settle_sections", +[](FabricEngine& e, int passes) { return stageOf(e).settle(e.fabric(), passes); },

@@ -39,6 +39,7 @@ void CollisionStage::setParams(const ContactParams& p) {
   p.validate();
   params_ = p;
   pairsValid_ = false;
+  cache_.clear(), cachePairs_.clear();  // contacts measured with other parameters
   filter_.selfExclude = p.selfExclude;
   filter_.yarnExclude.clear();  // configured again for the fabric at the next refit
 }
@@ -97,6 +98,7 @@ void CollisionStage::broad(const Fabric& f) {
       tree.collide(f, skinBoxes_, filter_, freshPairs_, &dirtyYarn_);
       pairs_.clear();
       std::merge(keptPairs_.begin(), keptPairs_.end(), freshPairs_.begin(), freshPairs_.end(), std::back_inserter(pairs_));
+      pairsChanged_ = true;
       ++stats.broadPhases;
       ++stats.partialBroadPhases;
       return;
@@ -107,15 +109,56 @@ void CollisionStage::broad(const Fabric& f) {
   if (broadPhase == BroadPhase::YarnTree) tree.collide(f, skinBoxes_, filter_, pairs_);
   else sap.collide(f, skinBoxes_, filter_, pairs_);
   pairsValid_ = true;
+  pairsChanged_ = true;
   ++stats.broadPhases;
 }
 
+// Each pair's last static contact is kept with its four node positions. While the CP sections are
+// unchanged and the four nodes have moved together to within cacheDistance (a translation of the
+// pair changes no gap), the contact is carried along instead of tested again: its gap changes by the
+// relative displacement of the two contact points along the normal (exact for any translation of
+// either CP; the turn of the normal that the small relative motion allows is neglected: at most
+// cacheDistance over the CP length, times the CP's size).
+bool CollisionStage::reuse(const Fabric& f, std::size_t k, CPContact& c) const {
+  const PairCache& pc = cache_[k];
+  if (!pc.valid || sectionStamp_[pc.contact.cpA] >= pc.clock || sectionStamp_[pc.contact.cpB] >= pc.clock) return false;
+  const Index i = f.elem0[pc.contact.cpA], j = f.elem0[pc.contact.cpB];
+  const Vec3 d0 = f.pos[i] - pc.x[0], d1 = f.pos[i + 1] - pc.x[1], d2 = f.pos[j] - pc.x[2], d3 = f.pos[j + 1] - pc.x[3];
+  const Real lim = params_.cacheDistance * params_.cacheDistance;
+  if ((d1 - d0).squaredNorm() > lim || (d2 - d0).squaredNorm() > lim || (d3 - d0).squaredNorm() > lim) return false;
+  c = pc.contact;
+  const Vec3 dA = (1 - c.sA) * d0 + c.sA * d1, dB = (1 - c.sB) * d2 + c.sB * d3;
+  const Real dn = c.normal.dot(dB - dA);
+  c.gap += dn;
+  c.boxDepth -= dn;
+  c.point += 0.5 * (dA + dB);
+  return true;
+}
+
+// After a broad phase the cache follows its pairs (both lists sorted): a pair kept keeps its entry.
+void CollisionStage::remapCache() {
+  cacheOld_.swap(cache_);
+  cache_.assign(pairs_.size(), PairCache());
+  std::size_t o = 0;
+  for (std::size_t k = 0; k < pairs_.size(); ++k) {
+    while (o < cachePairs_.size() && cachePairs_[o] < pairs_[k]) ++o;
+    if (o < cachePairs_.size() && cachePairs_[o] == pairs_[k]) cache_[k] = cacheOld_[o];
+  }
+  cachePairs_ = pairs_;
+}
+
 void CollisionStage::narrow(const Fabric& f, Real dt) {
+  ++cacheClock_;
+  if (sectionStamp_.size() != f.elem0.size()) sectionStamp_.assign(f.elem0.size(), 0);
+  if (cachePairs_.size() != pairs_.size() || pairsChanged_) remapCache();
+  pairsChanged_ = false;
+  const bool caching = params_.cacheDistance > 0;
   // Contiguous slices of the sorted pairs, one per thread, concatenated in order: the same contacts
-  // in the same order for any thread count.
+  // in the same order for any thread count (each pair's cache entry is its own).
   const std::size_t n = pairs_.size();
   const int threads = n >= 4096 ? params_.threads : 1;  // below that a thread costs more than it saves
   slices_.resize(threads);
+  std::vector<long> reused(threads, 0);
   auto work = [&](int t) {
     std::vector<CPContact>& out = slices_[t];
     out.clear();
@@ -123,11 +166,26 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
     for (std::size_t k = n * t / threads; k < n * (t + 1) / threads; ++k) {
       const CPPair& pr = pairs_[k];
       if (!f.alive[pr.a] || !f.alive[pr.b]) continue;  // broken since the broad phase
+      if (caching && reuse(f, k, c)) {
+        out.push_back(c);
+        ++reused[t];
+        continue;
+      }
+      PairCache& pc = cache_[k];
+      pc.valid = false;
+      if (cpContactStatic(f, bounds_, pr.a, pr.b, params_.margin, params_.rule, c)) {
+        out.push_back(c);
+        if (caching) {
+          pc.valid = true, pc.contact = c, pc.clock = cacheClock_;
+          const Index i = f.elem0[pr.a], j = f.elem0[pr.b];
+          pc.x[0] = f.pos[i], pc.x[1] = f.pos[i + 1], pc.x[2] = f.pos[j], pc.x[3] = f.pos[j + 1];
+        }
+        continue;
+      }
       // The moving test only where the boxes grown by the step's motion meet (a yes/no SAT with early
       // out is far cheaper than its four sweeps, and a pair they keep apart cannot meet in the step).
-      if (cpContactStatic(f, bounds_, pr.a, pr.b, params_.margin, params_.rule, c) ||
-          (dt > 0 && obbOverlap(grown_[pr.a], grown_[pr.b]) &&
-           cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c)))
+      if (dt > 0 && obbOverlap(grown_[pr.a], grown_[pr.b]) &&
+          cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c))
         out.push_back(c);
     }
   };
@@ -136,7 +194,11 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
   work(0);
   for (std::thread& th : pool) th.join();
   contacts_.clear();
-  for (const auto& s : slices_) contacts_.insert(contacts_.end(), s.begin(), s.end());
+  stats.cached = 0;
+  for (int t = 0; t < threads; ++t) {
+    contacts_.insert(contacts_.end(), slices_[t].begin(), slices_[t].end());
+    stats.cached += reused[t];
+  }
 }
 
 void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
@@ -181,8 +243,12 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
     }
     if (!any) break;
     turnSections(f, tangent_, flatBefore_, dirSum_);
+    if (sectionStamp_.size() != f.elem0.size()) sectionStamp_.assign(f.elem0.size(), 0);
     for (Index e = 0; e < f.nElems(); ++e)
-      if (dirty_[e]) bounds_[e] = cpBound(f, tangent_, e, params_.rule, params_.margin);
+      if (dirty_[e]) {
+        bounds_[e] = cpBound(f, tangent_, e, params_.rule, params_.margin);
+        sectionStamp_[e] = cacheClock_;  // the cached contacts of this CP no longer hold
+      }
     for (CPContact& c : contacts_) {
       if (c.time > 0 || !(dirty_[c.cpA] || dirty_[c.cpB])) continue;
       CPContact again;

@@ -28,6 +28,7 @@ struct CollisionStats {
   long candidates = 0;        ///< candidate pairs (of the last broad phase, which later steps may reuse)
   long contacts = 0;          ///< static + moving contacts
   long moving = 0;            ///< of which found by the moving test (not touching at the start)
+  long cached = 0;            ///< of which carried from an earlier step (ContactParams::cacheDistance)
   long flattened = 0;         ///< contacts whose overlap was (partly) taken up by flattening
   int flattenPasses = 0;      ///< passes made
   ImpulseReport impulses;     ///< the impulse solve
@@ -101,6 +102,14 @@ class CollisionStage : public StepHook {
   void refit(Fabric& f, Real dt);
   void broad(const Fabric& f);
   void narrow(const Fabric& f, Real dt);
+  struct PairCache {
+    bool valid = false;
+    long clock = 0;     // narrow phase that measured it
+    CPContact contact;
+    Vec3 x[4];          // the four node positions then [m]
+  };
+  bool reuse(const Fabric& f, std::size_t k, CPContact& c) const;
+  void remapCache();
   void narrowBodies(const Fabric& f, Real dt);
   int flatten(Fabric& f, int maxPasses);
 
@@ -117,7 +126,11 @@ class CollisionStage : public StepHook {
   Real bodyWork_ = 0;
   std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per thread
   std::vector<std::uint8_t> dirty_, dirtyYarn_;
-  std::vector<CPPair> keptPairs_, freshPairs_;
+  std::vector<CPPair> keptPairs_, freshPairs_, cachePairs_;
+  std::vector<PairCache> cache_, cacheOld_;
+  std::vector<long> sectionStamp_;  // per CP: narrow phase in which its sections last changed
+  long cacheClock_ = 0;
+  bool pairsChanged_ = false;
   ImpulseLaw law_;
 };
 

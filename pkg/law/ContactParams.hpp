@@ -28,6 +28,10 @@ struct ContactParams {
   /// CPs of one yarn this many elements apart or closer never collide (>= 1); raised per yarn to
   /// 1 + ceil(2 r0 / l0) (PairFilter).
   Index selfExclude = 1;
+  /// A pair's static contact is carried to the next step, instead of tested again, while its CPs'
+  /// sections are unchanged and its four nodes have moved together to within this distance [m] >= 0
+  /// (0: every pair is tested every step). The gap follows the relative motion along the normal.
+  Real cacheDistance = 1e-7;
   /// Contacts between yarns (CP-CP) on; false leaves only the contacts with rigid bodies (yarns then
   /// pass through each other: for scenes where only the projectile matters, and for comparisons).
   bool yarnContacts = true;
