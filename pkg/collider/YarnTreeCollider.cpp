@@ -73,8 +73,8 @@ void YarnTreeCollider::build(const Fabric& f) {
   }
 }
 
-void YarnTreeCollider::refit(const std::vector<OBB>& boxes) {
-  for (Index k = static_cast<Index>(nodes_.size()) - 1; k >= 0; --k) {  // children before parents
+void YarnTreeCollider::refitRange(const std::vector<OBB>& boxes, Index first, Index last) {
+  for (Index k = last - 1; k >= first; --k) {  // children before parents
     Node& n = nodes_[k];
     if (n.leaf()) {
       n.box = boxes[n.lo];
@@ -131,7 +131,18 @@ void YarnTreeCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, c
   for (std::size_t y = 0; same && y < f.yarns.size(); ++y)
     same = layout_[2 * y] == f.yarns[y].firstElem && layout_[2 * y + 1] == f.yarns[y].nElems;
   if (!same) build(f);
-  refit(boxes);
+  // Each yarn's nodes are contiguous (built yarn after yarn). With `dirty`, only the flagged yarns'
+  // boxes changed since the last call, so only their trees are refitted.
+  for (std::size_t y = 0; y < root_.size(); ++y) {
+    if (root_[y] < 0 || (dirty && same && !(*dirty)[y])) continue;
+    Index end = static_cast<Index>(nodes_.size());
+    for (std::size_t z = y + 1; z < root_.size(); ++z)
+      if (root_[z] >= 0) {
+        end = root_[z];
+        break;
+      }
+    refitRange(boxes, root_[y], end);
+  }
   pairs.clear();
 
   // Across yarns: sort the roots' world-axis-aligned extents along x and sweep (few yarns).

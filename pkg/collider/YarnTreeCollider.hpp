@@ -40,7 +40,7 @@ class YarnTreeCollider {
   };
   Index buildRange(Index lo, Index hi);
   void build(const Fabric& f);
-  void refit(const std::vector<OBB>& boxes);
+  void refitRange(const std::vector<OBB>& boxes, Index first, Index last);  // nodes [first, last), bottom up
   void descend(const Fabric& f, Index p, Index q, const PairFilter& filter, std::vector<CPPair>& pairs);
 
   std::vector<Node> nodes_;  // pre-order: children after their parent

@@ -173,6 +173,10 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
       }
       PairCache& pc = cache_[k];
       pc.valid = false;
+      // The bounds lie inside the boxes grown by the step's motion: where those do not meet, the
+      // pair neither touches nor meets within the step (a yes/no SAT with early out, cheaper than
+      // the static test's depth and far cheaper than the moving test's four sweeps).
+      if (!obbOverlap(grown_[pr.a], grown_[pr.b])) continue;
       if (cpContactStatic(f, bounds_, pr.a, pr.b, params_.margin, params_.rule, c)) {
         out.push_back(c);
         if (caching) {
@@ -182,10 +186,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         }
         continue;
       }
-      // The moving test only where the boxes grown by the step's motion meet (a yes/no SAT with early
-      // out is far cheaper than its four sweeps, and a pair they keep apart cannot meet in the step).
-      if (dt > 0 && obbOverlap(grown_[pr.a], grown_[pr.b]) &&
-          cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c))
+      if (dt > 0 && cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c))
         out.push_back(c);
     }
   };

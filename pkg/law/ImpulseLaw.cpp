@@ -106,10 +106,14 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   rep.rows = static_cast<long>(rows_.size());
   if (rows_.empty()) return;
 
+  // The nodes the rows touch, each once, in the order the rows first reach them (a mark per node:
+  // linear, where sorting the list cost 3 % of a ballistic step).
   touched_.clear();
-  for (const Row& r : rows_) touched_.insert(touched_.end(), r.node, r.node + 4);
-  std::sort(touched_.begin(), touched_.end());
-  touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
+  marked_.resize(f.nNodes(), 0);
+  for (const Row& r : rows_)
+    for (int k = 0; k < 4; ++k)
+      if (!marked_[r.node[k]]) marked_[r.node[k]] = 1, touched_.push_back(r.node[k]);
+  for (Index i : touched_) marked_[i] = 0;
   dt_ = dt;
   keepVelocities(f);
 

@@ -96,6 +96,7 @@ class ImpulseLaw {
   Vec3Array vBefore_;
   Real dt_ = 0;
   std::vector<Index> touched_;
+  std::vector<std::uint8_t> marked_;
 };
 
 }  // namespace woven
