@@ -2,7 +2,8 @@
 // the step or, failing that, moving over it: the body's impulses (law/ImpulseLaw) need the same
 // normal, gap, point and weight along the CP as a CP-CP contact.
 //   Box part:    the CP's OBB (the bound functor's, with its margin) against the part's box by the
-//                separating-axis test (paper Sec. 4.2-4.4: the paper bounds its projectile by an OBB);
+//                separating-axis test (paper Sec. 4.2-4.4: the paper bounds its projectile by an OBB)
+//                for the normal; the depth along it from the CP's elliptic end sections;
 //                when they are apart at the start, Eberly's moving SAT over the step with the body's
 //                velocity at the part centre against either node's velocity (the earliest hit).
 //   Sphere part: the closest point of the CP's axis to the centre, and the section's elliptic
