@@ -22,6 +22,7 @@ from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS
 from woven.contact import CONTACT_KEYS
 from yade import plot, utils
+import woven.ballistic
 
 defaults = dict(WEAVE_KEYS)
 defaults.update({
@@ -95,57 +96,17 @@ if p.mirror_every < 0:
     bad('mirror_every', '0 (off) or a step count')
 d = out_dir('ballistic', p)
 
-# --- the ply ---
-weave_args = {k: p[k] for k in WEAVE_KEYS}
-pat = woven.pattern(p.pattern, p.twill_over, p.twill_under, p.satin_n, p.satin_step, p.basket_n)
-probe = woven.weave(**dict(weave_args, nx=1, ny=1))
-spacing_x = probe.summary['length_x'] / len(probe.weft_yarns)
-spacing_y = probe.summary['length_y'] / len(probe.warp_yarns)
-if p.nx <= 0:
-    weave_args['nx'] = max(1, int(round(p.side / spacing_x / pat.cols)))
-if p.ny <= 0:
-    weave_args['ny'] = max(1, int(round(p.side / spacing_y / pat.rows)))
-w = woven.weave(**weave_args)
-eng = w.engine
-woven.contact.enable(eng, **{k: p[k] for k in CONTACT_KEYS})
-settle_left = eng.settle_sections()
-if p.state:
-    eng.load_state(p.state)
-ends = {}
-for y in w.warp_yarns + w.weft_yarns:
-    info = eng.yarn(y)
-    ends[y] = (info['first_node'], info['first_node'] + info['n_nodes'] - 1)
-held = w.warp_yarns + w.weft_yarns if p.clamp == 4 else (w.warp_yarns if p.clamp == 2 else [])
-for y in held:
-    eng.fix(ends[y][0])
-    eng.fix(ends[y][1])
-eng.enable_breakage(strain=p.break_strain, filter_length=p.break_filter, weibull_m=p.weibull_m, seed=p.seed)
-
-X0 = woven.positions(eng).copy()
-thickness = max(eng.yarn(y)['thickness'] for y in (w.warp_yarns[0], w.weft_yarns[0]))
-centre = X0.mean(axis=0)
-z_mid = float(np.median(X0[:, 2]))
-ab0 = woven.section_semi_axes(eng)
-z_top = float(np.max(X0[:, 2] + ab0[:, 0]))  # above every section, whatever its turn
-
-# --- the projectile: an ordinary YADE body ---
+# --- the ply and the projectile (an ordinary YADE body) ---
 O.engines = []
 O.bodies.clear()
+ply = woven.ballistic.build_ply({k: p[k] for k in WEAVE_KEYS}, {k: p[k] for k in CONTACT_KEYS}, side=p.side,
+                                clamp=p.clamp, state=p.state,
+                                breakage=dict(strain=p.break_strain, filter_length=p.break_filter,
+                                              weibull_m=p.weibull_m, seed=p.seed))
+w, eng, settle_left = ply.weave, ply.engine, ply.settle_left
+X0, thickness, z_mid = ply.X0, ply.thickness, ply.z_mid
 half = 0.5 * p.size
-start = (centre[0], centre[1], z_top + half + p.standoff)
-if p.shape == 'box':
-    body = utils.box(start, (half, half, half), fixed=False)
-    inertia = p.mass * p.size ** 2 / 6  # cube about its centre
-else:
-    body = utils.sphere(start, half, fixed=False)
-    inertia = 0.4 * p.mass * half ** 2
-body.mask = 0  # no YADE contacts with the mirrored yarn bodies
-pid = O.bodies.append(body)
-proj = O.bodies[pid]
-proj.state.mass = p.mass
-proj.state.inertia = Vector3(inertia, inertia, inertia)
-proj.state.vel = Vector3(0, 0, -p.V)
-woven.coupling.couple(eng, [pid])  # refuses a projectile that starts inside the ply
+proj = woven.ballistic.add_projectile(ply, p.shape, p.mass, p.size, p.V, p.standoff)
 
 O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
 woven.attach(eng, set_dt=True, safety=p.safety)

@@ -1,0 +1,74 @@
+# Benchmark of the default ballistic scene (scripts/ballistic.py's defaults: KM2 706 single ply 50.8 mm,
+# clamped on 4 edges, cube 1.1 g at 200 m/s), all in one process on one core:
+#   yade -n -x scripts/bench_ballistic.py [t_end=1e-4] [chain_steps=300] [out=DIR]
+# 1. baseline: the same ply's springs and integration alone (collisions off), chain_steps steps;
+# 2. the coupled scene for t_end without stopping at perforation: wall time, CP-steps per second and
+#    the time by phase (refit, broad, narrow, response from the collision stage's clocks; springs,
+#    integration, breakage and the YADE adapter as the rest).
+# Prints the figures, the ratio to the baseline and to the goal (100 us in 30 s), and writes
+# out/bench_ballistic/summary.json.
+import json
+import os
+import time
+
+import woven
+import woven.ballistic
+from woven.params import read_params
+from woven.output import out_dir, write_summary
+from woven.contact import CONTACT_KEYS
+
+p = read_params({'t_end': (1e-4, 's', 'simulated time of the coupled run'),
+                 'chain_steps': (300, '', 'steps of the springs-only baseline'),
+                 'side': (0.0508, 'm', 'ply side'), 'cp_per_span': (2, '', 'CPs between crossings'),
+                 'goal_seconds': (30.0, 's', 'goal: wall time for 100 us of simulated time'),
+                 'out': ('', '', 'output folder (default out/bench_ballistic)')})
+d = out_dir('bench_ballistic', p)
+weave_args = {'preset': 'km2_706', 'nx': 0, 'ny': 0, 'cp_per_span': p.cp_per_span}
+# The scene's contact settings (scripts/ballistic.py)
+contact_args = {k: v[0] for k, v in CONTACT_KEYS.items()}
+contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=10, skin=1e-5)
+
+# 1. baseline: springs and integration of the same ply, collisions off
+O.engines = []
+O.bodies.clear()
+base = woven.ballistic.build_ply(weave_args, contact_args, side=p.side, clamp=4, breakage={})
+be = base.engine
+be.disable_collisions()
+dt = 0.7 * be.dt_crit
+t0 = time.perf_counter()
+be.run(dt, p.chain_steps)
+chain_seconds = time.perf_counter() - t0
+chain_rate = be.n_elements * p.chain_steps / chain_seconds
+
+# 2. the coupled scene
+O.engines = []
+O.bodies.clear()
+ply = woven.ballistic.build_ply(weave_args, contact_args, side=p.side, clamp=4,
+                                breakage=dict(strain=0.0, filter_length=1e-3, weibull_m=0.0, seed=1))
+proj = woven.ballistic.add_projectile(ply)
+O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
+woven.attach(ply.engine)
+steps = int(round(p.t_end / O.dt))
+t0 = time.perf_counter()
+O.run(steps, True)
+wall = time.perf_counter() - t0
+s = ply.engine.collision_stats()
+phases = {'refit': s['seconds_refit'], 'broad': s['seconds_broad'], 'narrow': s['seconds_narrow'],
+          'response': s['seconds_respond']}
+phases['springs_integration_breakage_adapter'] = wall - sum(phases.values())
+rate = ply.engine.n_elements * steps / wall
+per_100us = wall * 1e-4 / (steps * O.dt)
+measured = {'cps': ply.engine.n_elements, 'steps': steps, 'dt': O.dt, 'simulated_time': steps * O.dt,
+            'wall_seconds': wall, 'cp_steps_per_second': rate, 'phase_seconds': phases,
+            'phase_fraction': {k: v / wall for k, v in phases.items()},
+            'wall_seconds_per_100us': per_100us, 'goal_ratio': per_100us / p.goal_seconds,
+            'chain_only_cp_steps_per_second': chain_rate, 'coupled_over_chain': rate / chain_rate,
+            'projectile_velocity_end': -proj.state.vel[2], 'broken_elements': ply.engine.broken_elements}
+write_summary(d, 'bench_ballistic', p, measured, {'goal_wall_seconds_per_100us': p.goal_seconds},
+              {'wall_seconds': 's', 'dt': 's', 'simulated_time': 's', 'cp_steps_per_second': '1/s',
+               'phase_seconds': 's', 'wall_seconds_per_100us': 's', 'chain_only_cp_steps_per_second': '1/s'}, 'ok')
+print('bench_ballistic: %d CPs, %d steps of %.3g s (%.1f us) in %.1f s: %.3g CP-steps/s' %
+      (ply.engine.n_elements, steps, O.dt, steps * O.dt * 1e6, wall, rate))
+print('  by phase: ' + ', '.join('%s %.1f s (%.0f %%)' % (k, v, 100 * v / wall) for k, v in phases.items()))
+print('  springs + integration alone: %.3g CP-steps/s; coupled / alone = %.3g' % (chain_rate, rate / chain_rate))
+print('  100 us of this scene: %.1f s; goal %.0f s -> %.2fx the goal' % (per_100us, p.goal_seconds, per_100us / p.goal_seconds))
