@@ -51,10 +51,11 @@ def lambert_jonas(V, V_bl, a, p):
     return np.where(V > V_bl, a * np.maximum(V ** p - V_bl ** p, 0.0) ** (1.0 / p), 0.0)
 
 
-def fit_lambert_jonas(V, vr, p_range=(1.5, 4.0)):
+def fit_lambert_jonas(V, vr, p_range=(1.0, 4.0)):
     """Least-squares Lambert-Jonas fit of residual velocities vr [m/s] (0 where the projectile was
     stopped) against impact velocities V [m/s]: for each ballistic limit V_bl on a grid below the
-    largest V and each exponent p in p_range, a follows in closed form (linear least squares); the
+    largest V and each exponent p in p_range, a follows in closed form (linear least squares, held
+    within (0, 1]: a projectile never leaves faster than it came); the
     best pair is refined on a finer grid. Returns dict V_bl (the V50 the fit gives) [m/s], a [-], p
     [-], rms [m/s]. Raises ValueError with fewer than 3 points or no perforation at all."""
     import numpy as np
@@ -71,14 +72,14 @@ def fit_lambert_jonas(V, vr, p_range=(1.5, 4.0)):
             for vbl in vbl_grid:
                 g = np.where(V > vbl, np.maximum(V ** p - vbl ** p, 0.0) ** (1.0 / p), 0.0)
                 gg = float(g @ g)
-                a = float(g @ vr) / gg if gg > 0 else 0.0
+                a = min(max(float(g @ vr) / gg, 0.0), 1.0) if gg > 0 else 0.0  # 0 < a <= 1: v_r <= V
                 sse = float(np.sum((a * g - vr) ** 2))
                 if out is None or sse < out[0]:
                     out = (sse, vbl, a, p)
         return out
     top = V.max()
-    sse, vbl, a, p = best(np.linspace(0, top, 401)[:-1], np.linspace(p_range[0], p_range[1], 26))
-    step_v, step_p = top / 400, (p_range[1] - p_range[0]) / 25
+    sse, vbl, a, p = best(np.linspace(0, top, 401)[:-1], np.linspace(p_range[0], p_range[1], 31))
+    step_v, step_p = top / 400, (p_range[1] - p_range[0]) / 30
     sse, vbl, a, p = best(np.linspace(max(0, vbl - step_v), min(top, vbl + step_v), 81),
                           np.linspace(max(p_range[0], p - step_p), min(p_range[1], p + step_p), 21))
     return {'V_bl': vbl, 'a': a, 'p': p, 'rms': math.sqrt(sse / len(V))}

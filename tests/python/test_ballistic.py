@@ -144,3 +144,12 @@ def test_mirror_and_v50_collector(tmp_path):
     assert s['measured']['V50'] == pytest.approx(95.0, rel=0.01)
     assert s['measured']['lambert_jonas_p'] == pytest.approx(2.0, rel=0.05)
     assert os.path.getsize(out / 'v50.png') > 10000 and os.path.exists(out / 'v50.csv')
+
+
+def test_bench_ballistic_reports_phases(tmp_path):
+    rc, log, s = run_scene('bench_ballistic.py', tmp_path, 'side=0.004', 't_end=1e-6', 'chain_steps=20')
+    assert rc == 0, log
+    m = s['measured']
+    assert set(m['phase_seconds']) == {'refit', 'broad', 'narrow', 'response', 'springs_integration_breakage_adapter'}
+    assert abs(sum(m['phase_seconds'].values()) - m['wall_seconds']) < 1e-6 * m['wall_seconds'] + 1e-9
+    assert m['cp_steps_per_second'] > 0 and m['coupled_over_chain'] > 0 and 'goal' in log
