@@ -125,7 +125,8 @@ void runSteps(FabricEngine& e, Real dt, long n) {
   for (long k = 0; k < n; ++k) e.step(dt);
 }
 void saveStatePy(FabricEngine& e, const std::string& path, bool lastGood) {
-  saveState(path, lastGood ? e.lastGoodState() : e.state());
+  if (lastGood) saveState(path, e.lastGoodState());
+  else e.saveState(path);
 }
 void loadStatePy(FabricEngine& e, const std::string& path) {
   e.setState(loadState(path, e.fabric().nNodes()));
@@ -466,7 +467,10 @@ BOOST_PYTHON_MODULE(_woven) {
            "Writes positions, velocities, sections and the clock, bit for bit (last_good: the last state "
            "that passed the checks).")
       .def("load_state", &loadStatePy, (bp::arg("path")))
-      .def("restore_last_good", +[](FabricEngine& e) { e.dynamics().restoreLastGood(); })
+      .def("restore_last_good", +[](FabricEngine& e) {
+        e.dynamics().restoreLastGood();
+        if (e.collisions()) e.collisions()->invalidateCache();
+      })
       .add_property("velocity_ramp", +[](FabricEngine& e) { return e.dynamics().loads().velocityRamp; },
                     +[](FabricEngine& e, Real t) { e.dynamics().setVelocityRamp(t); },
                     "prescribed velocities grow linearly over this time from t = 0 [s] (0: at once)")

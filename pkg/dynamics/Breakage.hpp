@@ -7,10 +7,10 @@
 //     eps_f <- eps_f + (1 - exp(-dt/tau)) (eps - eps_f),      tau = filterLength / c,  c = sqrt(E/rho)
 // A step front in a discrete chain overshoots its plateau for a few elements behind the front
 // (physics-reference.md: up to ~1.27x; measured 1.04x on Smith's impact at a Courant number of 0.7):
-// the raw element strain breaks a yarn whose plateau is below the threshold. The overshoot lives for the few element transit
-// times l0/c it takes the front to pass; a strain held for longer than tau reaches the threshold with
-// a delay of about tau. filterLength = 0 compares the raw element strain (shown against the filtered
-// one in tests/cpp/test_breakage.cpp and docs/ballistic.md).
+// the raw element strain breaks a yarn whose plateau is below the threshold. The overshoot lives for
+// the few element transit times l0/c it takes the front to pass; a strain held for longer than tau
+// reaches the threshold with a delay of about tau. filterLength = 0 compares the raw element strain
+// (shown against the filtered one in tests/cpp/test_ballistic.cpp and docs/ballistic.md).
 //
 // Optional Weibull distribution of yarn strength: each yarn's failure strain is drawn from a
 // Weibull law of modulus m whose mean is the material's failure strain,

@@ -39,7 +39,7 @@ void CollisionStage::setParams(const ContactParams& p) {
   p.validate();
   params_ = p;
   pairsValid_ = false;
-  cache_.clear(), cachePairs_.clear();  // contacts measured with other parameters
+  invalidateCache();  // contacts measured with other parameters
   filter_.selfExclude = p.selfExclude;
   filter_.yarnExclude.clear();  // configured again for the fabric at the next refit
 }

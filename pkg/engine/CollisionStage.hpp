@@ -73,6 +73,10 @@ class CollisionStage : public StepHook {
   /// impulses gave): the adapter sets them before FabricEngine::step and reads them after.
   std::vector<RigidBody> bodies;
   const std::vector<BodyContact>& bodyContacts() const { return bodyContacts_; }
+  /// Forgets the carried contacts (ContactParams::cacheDistance): every pair is tested at the next
+  /// step. Called when a state is saved or loaded, so that a run continued from a saved state and
+  /// the run that saved it go on bit for bit alike.
+  void invalidateCache() { cache_.clear(), cachePairs_.clear(); }
   /// Largest overlap of body k with any CP in the fabric as it stands [m] (<= 0: clear of it); moves
   /// nothing.
   Real bodyOverlap(Fabric& f, int k);

@@ -38,6 +38,11 @@ KinematicState FabricEngine::lastGoodState() const {
   return s;
 }
 
+void FabricEngine::saveState(const std::string& path) {
+  woven::saveState(path, state());
+  if (collisions_) collisions_->invalidateCache();
+}
+
 void FabricEngine::setState(const KinematicState& s) {
   require(static_cast<Index>(s.pos.size()) == fabric_->nNodes() && s.vel.size() == s.pos.size(), "state",
           static_cast<double>(s.pos.size()), "a state with " + fmt(fabric_->nNodes()) + " nodes");
@@ -46,6 +51,7 @@ void FabricEngine::setState(const KinematicState& s) {
   if (s.flat.size() == s.pos.size() && s.dir.size() == s.pos.size()) fabric_->secFlat = s.flat, fabric_->secDir = s.dir;
   dynamics_.refreshForces();
   dynamics_.setClock(s.step, s.time, s.lastDt);
+  if (collisions_) collisions_->invalidateCache();
 }
 
 }  // namespace woven

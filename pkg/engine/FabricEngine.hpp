@@ -8,6 +8,7 @@
 #include "fabric/Fabric.hpp"
 #include "fabric/StateIO.hpp"
 #include <memory>
+#include <string>
 
 namespace woven {
 
@@ -36,9 +37,13 @@ class FabricEngine {
   const CollisionStage* collisions() const { return collisions_.get(); }
 
   KinematicState state() const;
+  /// Writes the state to `path` (StateIO) and forgets the collision stage's carried contacts, so
+  /// that this run and one loaded from the file continue bit for bit alike.
+  void saveState(const std::string& path);
   KinematicState lastGoodState() const;
   /// Loads a saved state (same node count), bit for bit: positions, velocities, sections (when the
-  /// state has them) and the clock, so the run goes on exactly as the saved one would have.
+  /// state has them) and the clock, so the run goes on exactly as the saved one would have (the
+  /// carried contacts are forgotten on both sides: saveState).
   void setState(const KinematicState& s);
 
  private:

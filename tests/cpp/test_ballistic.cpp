@@ -192,8 +192,8 @@ Vec3 momentum(const FabricEngine& e) {
 }  // namespace
 
 // Impulses between a free yarn and a body conserve the total momentum (the springs do too), step
-// by step, for a box hit face on and a sphere hit off the yarn's axis (which also turns... nothing:
-// a sphere's impulse passes through its centre) and a box hit off centre, which must spin.
+// by step: a box hit face on; a sphere hit off the yarn's axis, which does not turn (its impulses
+// pass through its centre); a box hit off centre, which must turn.
 TEST(RigidBodies, ExchangeMomentumExactlyAndTurnWithTheirInertia) {
   for (int shape = 0; shape < 3; ++shape) {
     auto e = yarnEngine(0.0, false);
@@ -212,8 +212,12 @@ TEST(RigidBodies, ExchangeMomentumExactlyAndTurnWithTheirInertia) {
     EXPECT_GT(rows, 0) << "shape " << shape;
     const RigidBody& b = e->collisions()->bodies[0];
     EXPECT_GT(b.vel.z(), -50) << "the yarn slows the body";
-    if (shape == 2) EXPECT_GT(std::abs(b.angVel.x()), 1.0) << "an off-centre hit turns the box";
-    if (shape == 1) EXPECT_LT(b.angVel.norm(), 1e-9) << "a frictionless sphere does not turn";
+    if (shape == 2) {
+      EXPECT_GT(std::abs(b.angVel.x()), 1.0) << "an off-centre hit turns the box";
+    }
+    if (shape == 1) {
+      EXPECT_LT(b.angVel.norm(), 1e-9) << "a frictionless sphere does not turn";
+    }
   }
 }
 
