@@ -138,7 +138,7 @@ rows = []
 
 
 def nose_z():
-    return proj.state.pos[2] - (half if p.shape == 'box' else half)
+    return proj.state.pos[2] - half  # the cube's face or the sphere's pole
 
 
 def sample():
