@@ -482,7 +482,7 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("skin") = 5e-6, bp::arg("threads") = 1, bp::arg("yarn_contacts") = true, bp::arg("contact_cache") = 1e-7),
            "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction >= 0, mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
-           "in [0, 1] per step, correction_slop [m], broad_phase 'tree' or 'sap', skin [m] >= 0 (Verlet skin of "
+           "in [0, 1] per step, correction_slop [m], broad_phase 'tree', 'grid' or 'sap', skin [m] >= 0 (Verlet skin of "
            "the broad phase), threads >= 1 (narrow phase; same contacts for any count), yarn_contacts (False: only "
            "contacts with rigid bodies), contact_cache [m] >= 0 (a contact is carried while its nodes move "
            "together to within this; 0: off). See woven.contact.")

@@ -21,12 +21,13 @@ p = read_params({'t_end': (1e-4, 's', 'simulated time of the coupled run'),
                  'chain_steps': (300, '', 'steps of the springs-only baseline'),
                  'side': (0.0508, 'm', 'ply side'), 'cp_per_span': (2, '', 'CPs between crossings'),
                  'goal_seconds': (30.0, 's', 'goal: wall time for 100 us of simulated time'),
+                 'broad_phase': ('grid', '', "'grid' (the scene's default), 'tree' or 'sap'"),
                  'out': ('', '', 'output folder (default out/bench_ballistic)')})
 d = out_dir('bench_ballistic', p)
 weave_args = {'preset': 'km2_706', 'nx': 0, 'ny': 0, 'cp_per_span': p.cp_per_span}
 # The scene's contact settings (scripts/ballistic.py)
 contact_args = {k: v[0] for k, v in CONTACT_KEYS.items()}
-contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=10, skin=1e-5)
+contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=10, skin=1e-5, broad_phase=p.broad_phase)
 
 # 1. baseline: springs and integration of the same ply, collisions off
 O.engines = []

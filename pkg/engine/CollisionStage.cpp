@@ -30,7 +30,9 @@ inline bool lockedCP(const Fabric& f, Index e, Real mcd) {
 BroadPhase broadPhaseByName(const std::string& name) {
   if (name == "tree") return BroadPhase::YarnTree;
   if (name == "sap") return BroadPhase::SweepAndPrune;
-  throw ParameterError("broad_phase", "'" + name + "'", "'tree' (OBB tree per yarn) or 'sap' (sweep and prune)");
+  if (name == "grid") return BroadPhase::Grid;
+  throw ParameterError("broad_phase", "'" + name + "'",
+                       "'tree' (OBB tree per yarn), 'sap' (sweep and prune) or 'grid' (uniform grid of cells)");
 }
 
 CollisionStage::CollisionStage(const ContactParams& p, BroadPhase broad) : broadPhase(broad) { setParams(p); }
@@ -107,6 +109,7 @@ void CollisionStage::broad(const Fabric& f) {
   skinBoxes_ = grown_;
   for (OBB& b : skinBoxes_) b.extent.array() += params_.skin;
   if (broadPhase == BroadPhase::YarnTree) tree.collide(f, skinBoxes_, filter_, pairs_);
+  else if (broadPhase == BroadPhase::Grid) grid.collide(f, skinBoxes_, filter_, pairs_);
   else sap.collide(f, skinBoxes_, filter_, pairs_);
   pairsValid_ = true;
   pairsChanged_ = true;
@@ -355,6 +358,7 @@ Real CollisionStage::overlap(Fabric& f) {
 void CollisionStage::candidatePairs(Fabric& f, BroadPhase which, std::vector<CPPair>& out) {
   refit(f, 0);
   if (which == BroadPhase::YarnTree) tree.collide(f, grown_, filter_, out);
+  else if (which == BroadPhase::Grid) grid.collide(f, grown_, filter_, out);
   else sap.collide(f, grown_, filter_, out);
 }
 

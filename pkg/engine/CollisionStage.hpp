@@ -10,6 +10,7 @@
 // It runs between the kick and the drift (ChainDynamics::StepHook) on x_n and v_{n+1/2}.
 #pragma once
 #include "collider/BodyCollider.hpp"
+#include "collider/GridCollider.hpp"
 #include "collider/SweepAndPrune.hpp"
 #include "collider/YarnTreeCollider.hpp"
 #include "dynamics/ChainDynamics.hpp"
@@ -19,8 +20,8 @@
 
 namespace woven {
 
-enum class BroadPhase : std::uint8_t { YarnTree = 0, SweepAndPrune = 1 };
-/// "tree" or "sap"; throws ParameterError("broad_phase") otherwise.
+enum class BroadPhase : std::uint8_t { YarnTree = 0, SweepAndPrune = 1, Grid = 2 };
+/// "tree", "sap" or "grid"; throws ParameterError("broad_phase") otherwise.
 BroadPhase broadPhaseByName(const std::string& name);
 
 struct CollisionStats {
@@ -101,6 +102,7 @@ class CollisionStage : public StepHook {
   CollisionStats stats;
   YarnTreeCollider tree;
   SweepAndPrune sap;
+  GridCollider grid;
 
  private:
   void refit(Fabric& f, Real dt);

@@ -16,7 +16,7 @@ CONTACT_KEYS = {
     'position_correction': (0.2, '', 'fraction of a locked overlap removed per step, in [0, 1]'),
     'correction_slop': (0.5e-6, 'm', 'overlap the positional correction leaves alone'),
     'self_exclude': (1, '', 'CPs of one yarn this many elements apart never collide (raised to the section size)'),
-    'broad_phase': ('tree', '', "'tree' (OBB tree per yarn) or 'sap' (sweep and prune)"),
+    'broad_phase': ('tree', '', "'tree' (OBB tree per yarn), 'grid' (uniform grid of cells) or 'sap' (sweep and prune)"),
     'skin': (5e-6, 'm', 'Verlet skin: candidate pairs are kept while every CP box stays inside its box grown by this'),
     'threads': (1, '', 'threads of the narrow phase (same contacts, bit for bit, for any count)'),
     'contact_cache': (1e-7, 'm', 'a contact is carried to the next step while its four nodes move together to within this (0: test every pair every step)'),

@@ -87,7 +87,7 @@ TEST(CPBound, EnclosesTheEllipticCylinderAndTouchesIt) {
   }
 }
 
-TEST(Collider, TreeSweepAndPruneAndBruteForceGiveTheSamePairs) {
+TEST(Collider, TreeSweepAndPruneGridAndBruteForceGiveTheSamePairs) {
   WeaveParams p = km2_706();
   p.nx = 4, p.ny = 4;
   Weave w = buildWeave(p);
@@ -103,10 +103,11 @@ TEST(Collider, TreeSweepAndPruneAndBruteForceGiveTheSamePairs) {
       for (Vec3& x : f.pos) x += 1e-4 * trial * Vec3(G(rng), G(rng), G(rng));
       for (Real& e : f.secFlat) e = 0.3 * std::abs(G(rng)) > 0.6 ? 0.6 : 0.3 * std::abs(G(rng));
     }
-    std::vector<CPPair> tree, sap;
+    std::vector<CPPair> tree, sap, grid;
     cs.candidatePairs(f, BroadPhase::YarnTree, tree);
     if (trial == 0) rebuiltFirst = cs.tree.stats.rebuiltNodes;
     cs.candidatePairs(f, BroadPhase::SweepAndPrune, sap);
+    cs.candidatePairs(f, BroadPhase::Grid, grid);
     // Brute force over all pairs with the same box test.
     std::vector<CPPair> brute;
     PairFilter filter;
@@ -118,6 +119,7 @@ TEST(Collider, TreeSweepAndPruneAndBruteForceGiveTheSamePairs) {
     ASSERT_GT(brute.size(), 100u) << "trial " << trial;
     EXPECT_EQ(tree, brute) << "trial " << trial;
     EXPECT_EQ(sap, brute) << "trial " << trial;
+    EXPECT_EQ(grid, brute) << "trial " << trial;
   }
   EXPECT_GT(cs.tree.stats.rebuiltNodes, rebuiltFirst);  // the bent yarns degraded some nodes
 }
