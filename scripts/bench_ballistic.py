@@ -19,7 +19,7 @@ from woven.contact import CONTACT_KEYS
 
 p = read_params({'t_end': (1e-4, 's', 'simulated time of the coupled run'),
                  'chain_steps': (300, '', 'steps of the springs-only baseline'),
-                 'side': (0.0508, 'm', 'ply side'), 'cp_per_span': (2, '', 'CPs between crossings'),
+                 'side': (0.0508, 'm', 'ply side'), 'cp_per_span': (1, '', 'CPs between crossings (the scene\'s default: 1)'),
                  'goal_seconds': (30.0, 's', 'goal: wall time for 100 us of simulated time'),
                  'broad_phase': ('grid', '', "'grid' (the scene's default), 'tree' or 'sap'"),
                  'out': ('', '', 'output folder (default out/bench_ballistic)')})
