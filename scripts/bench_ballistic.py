@@ -1,7 +1,7 @@
 # Benchmark of the default ballistic scene (scripts/ballistic.py's defaults: KM2 706 single ply 50.8 mm,
 # clamped on 4 edges, cube 1.1 g at 200 m/s), all in one process on one core:
 #   yade -n -x scripts/bench_ballistic.py [t_end=1e-4] [chain_steps=300] [out=DIR]
-# 1. baseline: the same ply's springs and integration alone (collisions off), chain_steps steps;
+# 1. baseline: the same ply's springs and integration alone (collisions and breakage off), chain_steps steps;
 # 2. the coupled scene for t_end without stopping at perforation: wall time, CP-steps per second and
 #    the time by phase (refit, broad, narrow, response from the collision stage's clocks; springs,
 #    integration, breakage and the YADE adapter as the rest).
@@ -32,7 +32,7 @@ contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=10
 # 1. baseline: springs and integration of the same ply, collisions off
 O.engines = []
 O.bodies.clear()
-base = woven.ballistic.build_ply(weave_args, contact_args, side=p.side, clamp=4, breakage={})
+base = woven.ballistic.build_ply(weave_args, contact_args, side=p.side, clamp=4, breakage=None)
 be = base.engine
 be.disable_collisions()
 dt = 0.7 * be.dt_crit
