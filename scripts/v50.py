@@ -63,12 +63,15 @@ fig.savefig(os.path.join(d, 'v50.png'), dpi=110)
 measured = {'runs': len(rows), 'perforated': int(sum(r[2] for r in rows))}
 stopped = [r[0] for r in rows if not r[2]]
 through = [r[0] for r in rows if r[2]]
-if stopped and through:  # the V50 lies between the fastest stop and the slowest perforation (when they do not overlap)
-    measured['bracket'] = [max(stopped), min(through)]
+if stopped and through:
+    if max(stopped) < min(through):  # the V50 lies between the fastest stop and the slowest perforation
+        measured['bracket'] = [max(stopped), min(through)]
+    else:  # scatter (seeds): velocities where some runs stopped and some perforated
+        measured['mixed_zone'] = [min(through), max(stopped)]
 if fit:
     measured.update({'V50': fit['V_bl'], 'lambert_jonas_a': fit['a'], 'lambert_jonas_p': fit['p'], 'fit_rms': fit['rms']})
 write_summary(d, 'v50', p, measured, {'V50_km2_706_single_ply_022_rcc': [90.0, 100.0]},
-              {'V50': 'm/s', 'fit_rms': 'm/s', 'bracket': 'm/s'}, status)
+              {'V50': 'm/s', 'fit_rms': 'm/s', 'bracket': 'm/s', 'mixed_zone': 'm/s'}, status)
 print('v50: %s; %d runs, V50 = %s m/s -> %s' % (status, len(rows), '%.1f' % fit['V_bl'] if fit else 'n/a', d))
 if status != 'ok':
     sys.exit(1)
