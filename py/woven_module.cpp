@@ -497,9 +497,10 @@ BOOST_PYTHON_MODULE(_woven) {
       .def("_candidate_pairs", &candidatePairsPy, (bp::arg("broad_phase")))
       .def("_contacts", &contactsPy)
       .def("enable_breakage", &enableBreakage,
-           (bp::arg("strain") = 0.0, bp::arg("filter_length") = 1e-3, bp::arg("weibull_m") = 0.0, bp::arg("seed") = 1),
+           (bp::arg("strain") = 0.0, bp::arg("filter_length") = -4.0, bp::arg("weibull_m") = 0.0, bp::arg("seed") = 1),
            "Yarn breakage: an element breaks when its strain, low-pass filtered in time over tau = "
-           "filter_length / c [m / (m/s)] (0: raw element strain), passes the failure strain (strain <= 0: each "
+           "L / c (L = filter_length [m] when > 0, |filter_length| element lengths when < 0 (default 4), 0: raw "
+           "element strain), passes the failure strain (strain <= 0: each "
            "yarn's material failure_strain; else in (0, 10]). weibull_m in [1, 100] draws each yarn's strength "
            "from a Weibull law of that modulus with the failure strain as mean (seed >= 0); 0: no scatter.")
       .def("disable_breakage", +[](FabricEngine& e) { e.dynamics().configureBreakage(BreakageParams{}); })

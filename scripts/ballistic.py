@@ -54,7 +54,7 @@ defaults.update({
     'stop': (True, '', 'stop at perforation or arrest (else run to t_end)'),
     'clear_steps': (200, '', 'steps below the ply out of contact, or without a change of speed (> 1e-4 V), that count as perforated'),
     'break_strain': (0.0, '', 'failure strain in (0, 10]; 0: the material failure strain (KM2: 5 %)'),
-    'break_filter': (1e-3, 'm', 'strain filter length: tau = break_filter / c (0: raw element strain)'),
+    'break_filter': (-4.0, 'm', 'strain filter: tau = L / c, L = break_filter [m] if > 0, |break_filter| element lengths if < 0, 0: raw strain'),
     'weibull_m': (0.0, '', 'Weibull modulus of yarn strength (0: none; else [1, 100])'),
     'seed': (1, '', 'seed of the Weibull draw'),
     'safety': (0.7, '', 'O.dt = safety * dt_crit'),

@@ -45,7 +45,7 @@ chain_rate = be.n_elements * p.chain_steps / chain_seconds
 O.engines = []
 O.bodies.clear()
 ply = woven.ballistic.build_ply(weave_args, contact_args, side=p.side, clamp=4,
-                                breakage=dict(strain=0.0, filter_length=1e-3, weibull_m=0.0, seed=1))
+                                breakage=dict(strain=0.0, filter_length=-4.0, weibull_m=0.0, seed=1))
 proj = woven.ballistic.add_projectile(ply)
 O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
 woven.attach(ply.engine)

@@ -9,7 +9,8 @@ namespace woven {
 void BreakageParams::validate() const {
   require(std::isfinite(threshold) && threshold <= 10, "break_strain", threshold,
           "(0, 10] (<= 0: the material's failure strain)");
-  require(std::isfinite(filterLength) && filterLength >= 0, "break_filter", filterLength, "[0, inf) m (0: raw strain)");
+  require(std::isfinite(filterLength) && filterLength >= -100, "break_filter", filterLength,
+          "[-100, inf): > 0 a length [m], < 0 that many element lengths, 0 the raw strain");
   require(weibullModulus == 0 || (weibullModulus >= 1 && weibullModulus <= 100), "weibull_m", weibullModulus,
           "0 (no scatter) or [1, 100]");
 }
@@ -35,7 +36,8 @@ void Breakage::configure(const Fabric& f, const BreakageParams& p) {
   rate_.assign(f.nElems(), 0);
   for (Index e = 0; e < f.nElems(); ++e) {
     const YarnMaterial& m = f.materials[f.yarns[f.elemYarn[e]].material];
-    rate_[e] = p.filterLength > 0 ? std::sqrt(m.E / m.rho) / p.filterLength : INFINITY;
+    const Real L = p.filterLength > 0 ? p.filterLength : -p.filterLength * f.restLength[e];
+    rate_[e] = L > 0 ? std::sqrt(m.E / m.rho) / L : INFINITY;
   }
 }
 

@@ -4,13 +4,17 @@
 // book.
 //
 // The strain compared with the threshold is low-pass filtered in time, per element:
-//     eps_f <- eps_f + (1 - exp(-dt/tau)) (eps - eps_f),      tau = filterLength / c,  c = sqrt(E/rho)
+//     eps_f <- eps_f + (1 - exp(-dt/tau)) (eps - eps_f),      tau = L / c,  c = sqrt(E/rho)
+// with L = filterLength [m], or, for filterLength < 0, |filterLength| element rest lengths (default
+// 4 l0: the spike lasts a few element transit times l0/c, so the filter follows the resolution).
 // A step front in a discrete chain overshoots its plateau for a few elements behind the front
 // (physics-reference.md: up to ~1.27x; measured 1.04x on Smith's impact at a Courant number of 0.7):
 // the raw element strain breaks a yarn whose plateau is below the threshold. The overshoot lives for
 // the few element transit times l0/c it takes the front to pass; a strain held for longer than tau
-// reaches the threshold with a delay of about tau. filterLength = 0 compares the raw element strain
-// (shown against the filtered one in tests/cpp/test_ballistic.cpp and docs/ballistic.md).
+// reaches the threshold with a delay of about tau. A fixed 1 mm filter was enough for 0.2 mm CPs but
+// not for 0.75 mm ones (broken at 90 % of the threshold); 4 l0 holds at both. filterLength = 0
+// compares the raw element strain (shown against the filtered one in tests/cpp/test_ballistic.cpp and
+// docs/ballistic.md).
 //
 // Optional Weibull distribution of yarn strength: each yarn's failure strain is drawn from a
 // Weibull law of modulus m whose mean is the material's failure strain,
@@ -28,8 +32,9 @@ struct BreakageParams {
   bool enabled = false;
   /// Failure strain [-] in (0, 10]; <= 0 here means "each yarn's material failureStrain".
   Real threshold = 0;
-  /// Length over which the strain is averaged in time, as tau = filterLength / c [m] >= 0; 0: raw.
-  Real filterLength = 1e-3;
+  /// Filter length L of tau = L / c: [m] when > 0, |filterLength| element rest lengths when < 0
+  /// (default: 4 l0), 0: the raw element strain.
+  Real filterLength = -4;
   /// Weibull modulus of the yarn strengths [-]: 0 (all yarns at the threshold) or in [1, 100].
   Real weibullModulus = 0;
   std::uint64_t seed = 1;

@@ -19,12 +19,11 @@ struct SmithRun {
   Real maxRaw = 0, maxFiltered = 0, firstBreak = -1;
 };
 
-// Smith's transverse impact: a straight KM2 yarn of 400 CPs of 0.2 mm, ends fixed, the middle node
+// Smith's transverse impact: a straight KM2 yarn 80 mm long in CPs of l0, ends fixed, the middle node
 // driven transversely at the speed whose plateau strain is `plateau`; breakage at 5 % with the given
 // filter length [m]; run for `duration` [s] (the longitudinal wave does not reach the ends).
-SmithRun smith(Real plateau, Real filterLength, Real duration) {
-  const int n = 400;
-  const Real l0 = 0.2e-3;
+SmithRun smith(Real plateau, Real filterLength, Real duration, Real l0 = 0.2e-3) {
+  const int n = 2 * static_cast<int>(0.04 / l0);
   FabricEngine e(straightChain(n, l0));
   const Real c = std::sqrt(90e9 / 1440);
   e.dynamics().fix(0);
@@ -66,6 +65,19 @@ TEST(Breakage, FilteredStrainIgnoresTheDispersionSpikeRawDoesNot) {
   const SmithRun over = smith(1.1 * 0.05, 1e-3, 1e-6);
   EXPECT_GT(over.broken, 0);
   EXPECT_LT(over.firstBreak, 1e-6);
+}
+
+// The default filter, 4 element lengths, follows the resolution: with 0.75 mm CPs a fixed 1 mm
+// filter still broke the yarn at 90 % of the failure strain; 4 l0 (3 mm) does not at 97 %, and breaks
+// at 110 % within 1.5 us.
+TEST(Breakage, DefaultFilterFollowsTheElementLength) {
+  const Real l0 = 0.75e-3;
+  EXPECT_GT(smith(0.90 * 0.05, 1e-3, 4e-6, l0).broken, 0);
+  EXPECT_EQ(smith(0.97 * 0.05, BreakageParams().filterLength, 4e-6, l0).broken, 0);
+  EXPECT_EQ(smith(0.97 * 0.05, BreakageParams().filterLength, 4e-6).broken, 0);  // and with 0.2 mm CPs
+  const SmithRun over = smith(1.1 * 0.05, BreakageParams().filterLength, 1.5e-6, l0);
+  EXPECT_GT(over.broken, 0);
+  EXPECT_LT(over.firstBreak, 1.5e-6);
 }
 
 // A broken element releases exactly its elastic energy 1/2 K (l - l0)^2, leaves the books
@@ -135,7 +147,9 @@ TEST(Breakage, BadParametersNameThemselves) {
   p.enabled = true;
   p.threshold = 20;
   EXPECT_EQ(parameterOf([&] { d.configureBreakage(p); }), "break_strain");
-  p.threshold = 0.05, p.filterLength = -1;
+  p.threshold = 0.05, p.filterLength = NAN;
+  EXPECT_EQ(parameterOf([&] { d.configureBreakage(p); }), "break_filter");
+  p.filterLength = -200;
   EXPECT_EQ(parameterOf([&] { d.configureBreakage(p); }), "break_filter");
   p.filterLength = 0, p.weibullModulus = 0.5;
   EXPECT_EQ(parameterOf([&] { d.configureBreakage(p); }), "weibull_m");
