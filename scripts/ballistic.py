@@ -28,8 +28,8 @@ import woven.ballistic
 defaults = dict(WEAVE_KEYS)
 defaults.update({
     'nx': (0, '', 'repeats along x (0: from side)'), 'ny': (0, '', 'repeats along y (0: from side)'),
-    # 1 CP between crossings (0.75 mm): residual velocity within 1.1 % (200 m/s) and 3.9 % (120 m/s) of
-    # 4 CPs, where 2 CPs were 4.5 % and 26 % off (docs/ballistic.md, resolution); 100 us in ~21 s.
+    # 1 CP between crossings (0.75 mm): residual velocity within 2.7 % (200 m/s) and 12 % (120 m/s) of
+    # 4 CPs, where 2 CPs were 6.9 % and 24 % off (docs/ballistic.md, resolution); 100 us in 22 s.
     'cp_per_span': (1, '', WEAVE_KEYS['cp_per_span'][2]),
 })
 defaults.update(CONTACT_KEYS)
