@@ -53,11 +53,11 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
   for (const Cell& c : cellOf_) ++slotCount_[slotOf(c.x, c.y, c.z, mask) + 1];
   for (std::size_t s = 0; s < size; ++s) slotCount_[s + 1] += slotCount_[s];
   slotItem_.resize(cellOf_.size()), slotCell_.resize(cellOf_.size());
-  std::vector<std::uint32_t> fill(slotCount_.begin(), slotCount_.end() - 1);
+  fill_.assign(slotCount_.begin(), slotCount_.end() - 1);
   for (Index i = 0; i < n; ++i)
     for (Index k = cellBegin_[i]; k < cellBegin_[i + 1]; ++k) {
       const Cell& c = cellOf_[k];
-      const std::uint32_t at = fill[slotOf(c.x, c.y, c.z, mask)]++;
+      const std::uint32_t at = fill_[slotOf(c.x, c.y, c.z, mask)]++;
       slotItem_[at] = i, slotCell_[at] = k;
     }
 

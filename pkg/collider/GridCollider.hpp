@@ -29,6 +29,7 @@ class GridCollider {
   std::vector<Cell> cellOf_;               // the cells of each CP: cellBegin_[i] .. cellBegin_[i+1]
   std::vector<Index> cellBegin_;
   std::vector<std::uint32_t> slotCount_;   // hash table: entries per slot, then their start
+  std::vector<std::uint32_t> fill_;        // next free entry of each slot while scattering
   std::vector<Index> slotItem_, slotCell_;  // per entry: the CP and its cell (index into cellOf_)
   std::vector<Index> mine_;                // partners of one CP before sorting
 };

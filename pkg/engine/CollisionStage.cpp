@@ -19,13 +19,12 @@ inline double since(Clock::time_point& t) {
   t = now;
   return s;
 }
-}  // namespace
-
 // Both end sections at the MCD: the CP's flattening capacity is 0 along any normal (its reach at the
 // MCD is its reach now), so the capacity need not be computed.
 inline bool lockedCP(const Fabric& f, Index e, Real mcd) {
   return f.secFlat[f.elem0[e]] >= mcd && f.secFlat[f.elem0[e] + 1] >= mcd;
 }
+}  // namespace
 
 BroadPhase broadPhaseByName(const std::string& name) {
   if (name == "tree") return BroadPhase::YarnTree;
