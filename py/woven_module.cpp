@@ -4,6 +4,7 @@
 #include <boost/python.hpp>
 #include <boost/python/stl_iterator.hpp>
 #include "core/Errors.hpp"
+#include "core/Parallel.hpp"
 #include "engine/FabricEngine.hpp"
 #include "geom/SeparatingAxis.hpp"
 #include "weave/WeaveBuilder.hpp"
@@ -407,6 +408,16 @@ BOOST_PYTHON_MODULE(_woven) {
       .def_readwrite("cp_per_span", &WeaveParams::cpPerSpan)
       .def("validate", &WeaveParams::validate);
   bp::def("km2_706", &km2_706, "KM2 style 706 preset parameters.");
+  bp::def("set_threads", +[](int n) {
+            require(n >= 0 && n <= 1024, "threads", n, "[0, 1024] (0: follow OpenMP: OMP_NUM_THREADS, yade -j N)");
+            setThreads(n);
+          },
+          (bp::arg("n")),
+          "Threads of woven's loops in every engine: n >= 1 forces n, 0 follows OpenMP (OMP_NUM_THREADS, YADE's "
+          "-j N). Results are the same bits at any count (docs/design.md, Threads).");
+  bp::def("threads", +[]() { return threads(); }, "Threads woven's loops use now (in the calling thread).");
+  bp::def("openmp_threads", +[]() { return openmpThreads(); },
+          "OpenMP's count in the calling thread (omp_get_max_threads; 1 without OpenMP).");
 
   bp::class_<WeaveSummary>("WeaveSummary", "Measured figures of a built weave (SI).")
       .def_readonly("warp_yarns", &WeaveSummary::warpYarns).def_readonly("weft_yarns", &WeaveSummary::weftYarns)
@@ -479,11 +490,11 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("section_rule") = "constant_area", bp::arg("margin") = 1e-6, bp::arg("tolerance") = 1e-6,
             bp::arg("max_iterations") = 50, bp::arg("flatten_passes") = 4, bp::arg("position_correction") = 0.2,
             bp::arg("correction_slop") = 0.5e-6, bp::arg("self_exclude") = 1, bp::arg("broad_phase") = "tree",
-            bp::arg("skin") = 5e-6, bp::arg("threads") = 1, bp::arg("yarn_contacts") = true, bp::arg("contact_cache") = 1e-7),
+            bp::arg("skin") = 5e-6, bp::arg("threads") = 0, bp::arg("yarn_contacts") = true, bp::arg("contact_cache") = 1e-7),
            "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction >= 0, mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
            "in [0, 1] per step, correction_slop [m], broad_phase 'tree', 'grid' or 'sap', skin [m] >= 0 (Verlet skin of "
-           "the broad phase), threads >= 1 (narrow phase; same contacts for any count), yarn_contacts (False: only "
+           "the broad phase), threads in [0, 64] (collision stage; 0: woven.threads(); same results for any count), yarn_contacts (False: only "
            "contacts with rigid bodies), contact_cache [m] >= 0 (a contact is carried while its nodes move "
            "together to within this; 0: off). See woven.contact.")
       .def("disable_collisions", +[](FabricEngine& e) { e.disableCollisions(); })

@@ -129,6 +129,7 @@ class ChainDynamics {
   Real dtPrev_ = 0;
   Real dtCrit_ = 0;     // criticalTimeStep of the fabric: the engine's dt limit and the blow-up budget
   Breakage breakage_;
+  Vec3Array edge_;     // springForces: force of each chunk's first CP on the node the chunk before assigns
   Vec3Array goodPos_, goodVel_, goodDir_;
   std::vector<Real> goodFlat_, goodStiffness_, goodDamping_;
   std::vector<std::uint8_t> goodAlive_;

@@ -1,13 +1,13 @@
 #include "engine/CollisionStage.hpp"
 #include "bound/CPBound.hpp"
 #include "core/Errors.hpp"
+#include "core/Parallel.hpp"
 #include "geom/SeparatingAxis.hpp"
 #include "law/SectionFlattening.hpp"
 #include <algorithm>
 #include <chrono>
 #include <iterator>
 #include <cmath>
-#include <thread>
 
 namespace woven {
 
@@ -51,10 +51,10 @@ void CollisionStage::refit(Fabric& f, Real dt) {
   refitBounds(f, tangent_, params_.rule, params_.margin, bounds_);
   // Each CP's broad-phase box grows by the farthest its nodes can drift in the step.
   grow_.resize(bounds_.size());
-  for (Index e = 0; e < f.nElems(); ++e) {
+  parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
     const Index i = f.elem0[e];
     grow_[e] = dt * std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm()));
-  }
+  });
   growBoxes(bounds_, grow_, grown_);
 }
 
@@ -76,16 +76,14 @@ bool inside(const OBB& a, const OBB& b) {
 void CollisionStage::broad(const Fabric& f) {
   const bool partial = broadPhase == BroadPhase::YarnTree;
   if (pairsValid_ && skinBoxes_.size() == grown_.size()) {
+    // The containment test of every CP (threads), then the yarns that hold one outside (in order).
+    outside_.resize(grown_.size());
+    parallelFor(static_cast<Index>(grown_.size()), kParallelGrain, threads(),
+                [&](Index e) { outside_[e] = !inside(grown_[e], skinBoxes_[e]); });
     dirtyYarn_.assign(f.yarns.size(), 0);
     bool keep = true;
-    for (std::size_t e = 0; e < grown_.size(); ++e) {
-      if (partial && dirtyYarn_[f.elemYarn[e]]) continue;
-      if (!inside(grown_[e], skinBoxes_[e])) {
-        keep = false;
-        if (!partial) break;
-        dirtyYarn_[f.elemYarn[e]] = 1;
-      }
-    }
+    for (std::size_t e = 0; e < grown_.size(); ++e)
+      if (outside_[e]) keep = false, dirtyYarn_[f.elemYarn[e]] = 1;
     if (keep) return;
     if (partial) {
       for (std::size_t e = 0; e < grown_.size(); ++e)
@@ -155,22 +153,23 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
   if (cachePairs_.size() != pairs_.size() || pairsChanged_) remapCache();
   pairsChanged_ = false;
   const bool caching = params_.cacheDistance > 0;
-  // Contiguous slices of the sorted pairs, one per thread, concatenated in order: the same contacts
-  // in the same order for any thread count (each pair's cache entry is its own).
-  const std::size_t n = pairs_.size();
-  const int threads = n >= 4096 ? params_.threads : 1;  // below that a thread costs more than it saves
-  slices_.resize(threads);
-  std::vector<long> reused(threads, 0);
-  auto work = [&](int t) {
+  // Fixed chunks of the sorted pairs (threads take them in any order), concatenated in chunk order:
+  // the same contacts in the same order for any thread count (each pair's cache entry is its own).
+  constexpr Index kPairChunk = 512;
+  const Index n = static_cast<Index>(pairs_.size());
+  const Index chunks = chunkCount(n, kPairChunk);
+  slices_.resize(chunks);
+  reused_.assign(chunks, 0);
+  parallelForDynamic(chunks, 4, threads(), [&](Index t) {
     std::vector<CPContact>& out = slices_[t];
     out.clear();
     CPContact c;
-    for (std::size_t k = n * t / threads; k < n * (t + 1) / threads; ++k) {
+    for (Index k = t * kPairChunk, end = std::min(n, k + kPairChunk); k < end; ++k) {
       const CPPair& pr = pairs_[k];
       if (!f.alive[pr.a] || !f.alive[pr.b]) continue;  // broken since the broad phase
       if (caching && reuse(f, k, c)) {
         out.push_back(c);
-        ++reused[t];
+        ++reused_[t];
         continue;
       }
       PairCache& pc = cache_[k];
@@ -191,16 +190,12 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
       if (dt > 0 && cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c))
         out.push_back(c);
     }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
-  work(0);
-  for (std::thread& th : pool) th.join();
+  });
   contacts_.clear();
   stats.cached = 0;
-  for (int t = 0; t < threads; ++t) {
+  for (Index t = 0; t < chunks; ++t) {
     contacts_.insert(contacts_.end(), slices_[t].begin(), slices_[t].end());
-    stats.cached += reused[t];
+    stats.cached += reused_[t];
   }
 }
 
@@ -226,12 +221,23 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
     dirSum_.resize(f.pos.size(), Vec3::Zero());
     dirty_.assign(f.elem0.size(), 0);
     bool any = false;
-    for (const CPContact& c : contacts_) {
+    // The capacities depend on the snapshot flatBefore_ and on nothing the pass changes: measured for
+    // every contact at once (threads), then the contacts flatten in order.
+    const Index nc = static_cast<Index>(contacts_.size());
+    capacity_.resize(2 * contacts_.size());
+    parallelFor(nc, 256, threads(), [&](Index k) {
+      const CPContact& c = contacts_[k];
+      if (c.time > 0 || !(c.gap < -tiny)) return;
+      if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) return;  // the loop below skips it
+      capacity_[2 * k] = flatteningCapacity(f, tangent_, c.cpA, c.normal, params_, &flatBefore_);
+      capacity_[2 * k + 1] = flatteningCapacity(f, tangent_, c.cpB, c.normal, params_, &flatBefore_);
+    });
+    for (Index k = 0; k < nc; ++k) {
+      const CPContact& c = contacts_[k];
       if (c.time > 0 || !(c.gap < -tiny)) continue;
       if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) continue;  // capacity 0: left to the impulses
       const Real need = -c.gap;
-      const Real capA = flatteningCapacity(f, tangent_, c.cpA, c.normal, params_, &flatBefore_);
-      const Real capB = flatteningCapacity(f, tangent_, c.cpB, c.normal, params_, &flatBefore_);
+      const Real capA = capacity_[2 * k], capB = capacity_[2 * k + 1];
       if (capA + capB <= tiny) continue;  // locked: left to the impulses
       Real dA = std::min(capA, 0.5 * need);
       const Real dB = std::min(capB, need - dA);
@@ -247,22 +253,25 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
     if (!any) break;
     turnSections(f, tangent_, flatBefore_, dirSum_);
     if (sectionStamp_.size() != f.elem0.size()) sectionStamp_.assign(f.elem0.size(), 0);
-    for (Index e = 0; e < f.nElems(); ++e)
+    parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
       if (dirty_[e]) {
         bounds_[e] = cpBound(f, tangent_, e, params_.rule, params_.margin);
         sectionStamp_[e] = cacheClock_;  // the cached contacts of this CP no longer hold
       }
-    for (CPContact& c : contacts_) {
-      if (c.time > 0 || !(dirty_[c.cpA] || dirty_[c.cpB])) continue;
+    });
+    parallelFor(nc, 256, threads(), [&](Index k) {  // each contact on its own
+      CPContact& c = contacts_[k];
+      if (c.time > 0 || !(dirty_[c.cpA] || dirty_[c.cpB])) return;
       CPContact again;
       if (cpContactStatic(f, bounds_, c.cpA, c.cpB, params_.margin, params_.rule, again)) c = again;
       else c.gap = 2 * params_.margin;  // apart now: at least this far
-    }
+    });
   }
   return passes;
 }
 
 Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
+  const ThreadCountScope threadCount(params_.threads);
   auto t = Clock::now();
   for (const RigidBody& b : bodies) b.validate();
   refit(f, dt);
@@ -307,6 +316,7 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
 }
 
 Real CollisionStage::afterDrift(Fabric& f, Real dt) {
+  const ThreadCountScope threadCount(params_.threads);
   for (RigidBody& b : bodies) {
     b.pos += dt * b.vel;
     const Real angle = b.angVel.norm() * dt;  // YADE's rotation of a spherical body over the step
@@ -318,6 +328,7 @@ Real CollisionStage::afterDrift(Fabric& f, Real dt) {
 }
 
 Real CollisionStage::settle(Fabric& f, int maxPasses) {
+  const ThreadCountScope threadCount(params_.threads);
   Real left = 0;
   for (int outer = 0; outer < maxPasses; ++outer) {
     pairsValid_ = false;
@@ -333,6 +344,7 @@ Real CollisionStage::settle(Fabric& f, int maxPasses) {
 }
 
 Real CollisionStage::bodyOverlap(Fabric& f, int k) {
+  const ThreadCountScope threadCount(params_.threads);
   refit(f, 0);
   const RigidBody& b = bodies.at(k);
   Real worst = -INFINITY;
@@ -345,6 +357,7 @@ Real CollisionStage::bodyOverlap(Fabric& f, int k) {
 }
 
 Real CollisionStage::overlap(Fabric& f) {
+  const ThreadCountScope threadCount(params_.threads);
   pairsValid_ = false;
   refit(f, 0);
   broad(f);
@@ -355,6 +368,7 @@ Real CollisionStage::overlap(Fabric& f) {
 }
 
 void CollisionStage::candidatePairs(Fabric& f, BroadPhase which, std::vector<CPPair>& out) {
+  const ThreadCountScope threadCount(params_.threads);
   refit(f, 0);
   if (which == BroadPhase::YarnTree) tree.collide(f, grown_, filter_, out);
   else if (which == BroadPhase::Grid) grid.collide(f, grown_, filter_, out);

@@ -130,8 +130,10 @@ class CollisionStage : public StepHook {
   std::vector<BodyCandidate> bodyPairs_;
   std::vector<BodyContact> bodyContacts_;
   Real bodyWork_ = 0;
-  std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per thread
-  std::vector<std::uint8_t> dirty_, dirtyYarn_;
+  std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per chunk of pairs
+  std::vector<long> reused_;                    // carried contacts per chunk of pairs
+  std::vector<Real> capacity_;                  // flatten: both CPs' flattening capacity per contact [m]
+  std::vector<std::uint8_t> dirty_, dirtyYarn_, outside_;
   std::vector<CPPair> keptPairs_, freshPairs_, cachePairs_;
   std::vector<PairCache> cache_, cacheOld_;
   std::vector<long> sectionStamp_;  // per CP: narrow phase in which its sections last changed

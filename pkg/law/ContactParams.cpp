@@ -17,7 +17,7 @@ void ContactParams::validate() const {
           "position_correction", positionCorrection, "[0, 1]");
   require(std::isfinite(correctionSlop) && correctionSlop >= 0, "correction_slop", correctionSlop, "[0, inf) m");
   require(std::isfinite(cacheDistance) && cacheDistance >= 0, "contact_cache", cacheDistance, "[0, inf) m (0: off)");
-  require(threads >= 1 && threads <= 64, "threads", threads, "[1, 64]");
+  require(threads >= 0 && threads <= 64, "threads", threads, "[0, 64] (0: OpenMP's count)");
   require(selfExclude >= 1, "self_exclude", selfExclude, "[1, inf) elements (1: CPs sharing a node)");
 }
 

@@ -35,9 +35,10 @@ struct ContactParams {
   /// Contacts between yarns (CP-CP) on; false leaves only the contacts with rigid bodies (yarns then
   /// pass through each other: for scenes where only the projectile matters, and for comparisons).
   bool yarnContacts = true;
-  /// Threads for the narrow phase (>= 1). Each candidate pair is tested on its own and the contacts
-  /// are gathered in pair order, so any count gives the same contacts, bit for bit.
-  int threads = 1;
+  /// Threads of the collision stage, in [0, 64]: 0 follows woven's count (woven::threads(): OpenMP's,
+  /// i.e. OMP_NUM_THREADS or YADE's -j N, unless woven.set_threads forced one), >= 1 forces this
+  /// count. Any count gives the same contacts and the same state, bit for bit (core/Parallel.hpp).
+  int threads = 0;
 
   /// Throws ParameterError naming the parameter and its allowed range.
   void validate() const;

@@ -18,7 +18,7 @@ CONTACT_KEYS = {
     'self_exclude': (1, '', 'CPs of one yarn this many elements apart never collide (raised to the section size)'),
     'broad_phase': ('tree', '', "'tree' (OBB tree per yarn), 'grid' (uniform grid of cells) or 'sap' (sweep and prune)"),
     'skin': (5e-6, 'm', 'Verlet skin: candidate pairs are kept while every CP box stays inside its box grown by this'),
-    'threads': (1, '', 'threads of the narrow phase (same contacts, bit for bit, for any count)'),
+    'threads': (0, '', 'threads of the collision stage in [0, 64]; 0: woven.threads() (OMP_NUM_THREADS, yade -j N); the same results, bit for bit, for any count'),
     'contact_cache': (1e-7, 'm', 'a contact is carried to the next step while its four nodes move together to within this (0: test every pair every step)'),
     'yarn_contacts': (True, '', 'contacts between yarns (False: only with rigid bodies; yarns pass through each other)'),
 }
