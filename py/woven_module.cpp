@@ -106,7 +106,7 @@ bp::dict energyDict(FabricEngine& e) {
   bp::dict d;
   d["kinetic"] = b.kinetic, d["elastic"] = b.elastic, d["damped"] = b.damped, d["work"] = b.work;
   d["initial"] = b.initial, d["contact"] = b.contact, d["contact_input"] = b.contactInput;
-  d["released"] = b.released, d["body_work"] = b.bodyWork;
+  d["released"] = b.released, d["body_work"] = b.bodyWork, d["spring"] = b.spring;
   d["balance_error"] = b.balanceError();
   return d;
 }
