@@ -67,8 +67,10 @@ struct ContactParams {
   Real penaltyDamping = 0.0;
   Flattening flattening = Flattening::Geometric;
   /// Stiffness k_s [N/m] > 0 of one node section's spring (flattening Springs, paper Eq. 7): a section
-  /// flattened by r0 eps pushes back with k_s r0 eps.
-  Real sectionStiffness = 1e5;
+  /// flattened by r0 eps pushes back with k_s r0 eps. 1e4 N/m: a tenth of k_p, since a yarn's
+  /// filaments rearrange far more easily than a solid section compresses (not calibrated: the
+  /// paper gives no k_i).
+  Real sectionStiffness = 1e4;
 
   /// Throws ParameterError naming the parameter and its allowed range.
   void validate() const;

@@ -1,10 +1,15 @@
 #include "law/NormalForces.hpp"
+#include "core/Errors.hpp"
 #include <algorithm>
 #include <cmath>
 
 namespace woven {
 
-Real penaltyDtLimit(Real m, Real k) { return 2 * std::sqrt(m / k); }
+Real penaltyDtLimit(Real m, Real k) {
+  require(std::isfinite(m) && m > 0, "m", m, "(0, inf) kg");
+  require(std::isfinite(k) && k > 0, "k", k, "(0, inf) N/m");
+  return 2 * std::sqrt(m / k);
+}
 
 void NormalForces::addYarn(const Fabric& f, const CPContact& c, Real spring, Real k, Real zeta) {
   Row r;
@@ -51,13 +56,20 @@ void NormalForces::apply(Fabric& f, std::vector<RigidBody>* bodies, Real dt, Nor
   Real ke0 = 0;
   if (bodies)
     for (const RigidBody& b : *bodies) ke0 += b.dynamic() ? b.kineticEnergy() : 0;
+  marked_.resize(f.pos.size(), 0);
+  touched_.clear();
   for (std::size_t k = 0; k < rows_.size(); ++k) {
     const Row& r = rows_[k];
     if (!(r.mEff > 0)) continue;  // both sides kinematic
     vn0_[k] = normalVelocity(f, bodies, r);
     force_[k] = std::max(Real(0), r.spring - r.damper * vn0_[k]);
     rep.rows += force_[k] > 0;
+    if (force_[k] > 0)
+      for (Index i : r.node)
+        if (!marked_[i]) marked_[i] = 1, touched_.push_back(i);
   }
+  vBefore_.resize(touched_.size());
+  for (std::size_t k = 0; k < touched_.size(); ++k) vBefore_[k] = f.vel[touched_[k]];
   for (std::size_t k = 0; k < rows_.size(); ++k) {
     if (force_[k] == 0) continue;
     const Row& r = rows_[k];
@@ -78,6 +90,14 @@ void NormalForces::apply(Fabric& f, std::vector<RigidBody>* bodies, Real dt, Nor
     if (force_[k] == 0) continue;
     const Real vn = 0.5 * (vn0_[k] + normalVelocity(f, bodies, rows_[k]));
     rep.dissipated += -(force_[k] - rows_[k].spring) * vn * dt;
+  }
+  for (std::size_t k = 0; k < touched_.size(); ++k) {
+    const Index i = touched_[k];
+    marked_[i] = 0;
+    if (f.invMass[i] == 0) continue;
+    const Vec3 dv = f.vel[i] - vBefore_[k];
+    const Vec3 vn = vBefore_[k] - (0.5 * dt * f.invMass[i]) * f.force[i];
+    rep.halfKick += f.mass[i] * (0.5 * vn.dot(dv) + 0.125 * dv.squaredNorm());
   }
   if (bodies)
     for (const RigidBody& b : *bodies) rep.bodyWork += b.dynamic() ? -b.kineticEnergy() : 0;
