@@ -101,6 +101,7 @@ void ChainDynamics::start() {
   books_.contact = 0;
   books_.contactInput = 0;
   books_.released = 0;
+  books_.spring = 0;
   books_.bodyWork = 0;
   Real ke = 0;
   for (Index i = 0; i < f_.nNodes(); ++i) ke += 0.5 * f_.mass[i] * f_.vel[i].squaredNorm();
@@ -294,6 +295,7 @@ void ChainDynamics::step(Real dt, StepHook* hook) {
   } else {
     ke = gravity ? kickDrift<true, false>(dt, p) : kickDrift<false, false>(dt, p);
     if (std::isfinite(ke)) bookContact(hook->beforeDrift(f_, dt));
+    books_.spring = hook->springEnergy();
     gravity ? drift<true>(dt, p) : drift<false>(dt, p);
     if (std::isfinite(ke)) bookContact(hook->afterDrift(f_, dt));
     // What the bodies gave is work on the fabric, not contact dissipation: move it across.

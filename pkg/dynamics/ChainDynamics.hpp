@@ -41,6 +41,10 @@ class StepHook {
   /// Work the hook's rigid bodies did on the fabric in the calls since the last take [J]: part of
   /// the energy the calls returned that is not the contacts' dissipation (the books take it as work).
   virtual Real takeBodyWork() { return 0; }
+  /// Energy the hook's contact springs hold now, after beforeDrift, less what they held at its first
+  /// call [J] (EnergyBooks::spring). Kept out of the energy beforeDrift returns, so that an unstable
+  /// spring shows in the books' total (the blow-up check) instead of being booked away as contact input.
+  virtual Real springEnergy() const { return 0; }
 };
 
 class ChainDynamics {
