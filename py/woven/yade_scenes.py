@@ -1,0 +1,229 @@
+"""The scenes' `model=yade` runs: the same fabric in YADE's grid elements (woven.yade_grid), driven by
+YADE's own engines, with the same summary.json figures as the woven runs. SI units.
+
+    yade -n -x scripts/ballistic.py model=yade side=0.0127 t_end=3e-5
+"""
+import math
+import sys
+import time
+
+import numpy as np
+import yade.wrapper
+from yade import utils
+from yade._minieigenHP import Vector3
+
+from . import yade_grid as yg
+
+_O = yade.wrapper.Omega()
+
+MODELS = ('woven', 'yade')
+
+
+def check_model(p):
+    """Raises ValueError naming the key when p['model'] is not 'woven' or 'yade'."""
+    if p['model'] not in MODELS:
+        raise ValueError("model = %r is invalid: allowed 'woven' or 'yade'" % p['model'])
+    if p['model'] == 'yade' and not (0 < p['dt_factor'] <= 1):
+        raise ValueError('dt_factor = %r is invalid: allowed (0, 1]' % p['dt_factor'])
+
+
+def _kinetic(ids):
+    """Kinetic energy of bodies `ids` [J], translation and rotation."""
+    s = 0.0
+    for i in ids:
+        st = _O.bodies[i].state
+        s += 0.5 * st.mass * st.vel.squaredNorm()
+        w, I = st.angVel, st.inertia
+        s += 0.5 * (I[0] * w[0] ** 2 + I[1] * w[1] ** 2 + I[2] * w[2] ** 2)
+    return s
+
+
+def _elastic():
+    """Elastic energy [J] stored in the bonds (normal) and in the contacts (normal + shear) now."""
+    bonds, contacts = 0.0, 0.0
+    for i in _O.interactions:
+        ph = i.phys
+        if isinstance(i.geom, yade.wrapper.GridNodeGeom6D):
+            un = i.geom.penetrationDepth - ph.unp
+            bonds += 0.5 * ph.kn * un * un
+            if ph.ks > 0:
+                bonds += 0.5 * ph.shearForce.squaredNorm() / ph.ks
+        elif ph.kn > 0:
+            contacts += 0.5 * ph.normalForce.squaredNorm() / ph.kn
+            if ph.ks > 0:
+                contacts += 0.5 * ph.shearForce.squaredNorm() / ph.ks
+    return bonds, contacts
+
+
+def ballistic(p, d, weave_keys, contact_keys):
+    """The ballistic scene of scripts/ballistic.py in grid elements: the same ply (built by woven,
+    then mapped), clamped edges as held grid end nodes, a YADE Sphere or Box of the same mass, size
+    and speed. Writes d/summary.json and d/series.csv; returns the process exit status."""
+    import woven.ballistic
+    from .output import write_summary
+    from . import theory
+    O = _O
+    O.engines = []
+    O.bodies.clear()
+    O.interactions.clear()
+    ply = woven.ballistic.build_ply({k: p[k] for k in weave_keys}, {k: p[k] for k in contact_keys}, side=p.side, clamp=0)
+    w, e = ply.weave, ply.engine
+    info = e.yarn(w.warp_yarns[0])
+    eps_f = p.break_strain or info['failure_strain']
+    O.engines = yg.engines()
+    t0 = time.time()
+    g = yg.build(e, w.warp_yarns + w.weft_yarns, kn=p.kn, radius=p.grid_radius, bending=p.bending,
+                 failure_strain=eps_f, friction=p.friction)
+    n_warp = len(w.warp_yarns)
+    if p.clamp == 4:
+        g.fix_ends()
+    elif p.clamp == 2:
+        g.fix_ends(range(n_warp))
+    build_seconds = time.time() - t0
+    X = np.array([list(O.bodies[i].state.pos) for i in g.node_ids()])
+    centre = X.mean(axis=0)
+    z_mid = float(np.median(X[:, 2]))
+    z_top = float(X[:, 2].max()) + g.radius
+    half = 0.5 * p.size
+    start = Vector3(centre[0], centre[1], z_top + half + p.standoff)
+    mat = yg.projectile_material(g, p.shape, p.size)
+    if p.shape == 'box':
+        body = utils.box(start, (half, half, half), fixed=False, material=mat)
+        body.mask = yg.NODE_MASK | 4  # not equal to the nodes' mask: avoidSelfInteractionMask skips equal masks only
+        inertia = p.mass * p.size ** 2 / 6
+    else:
+        body = utils.sphere(start, half, fixed=False, material=mat)
+        body.mask = yg.CONNECTION_MASK
+        inertia = 0.4 * p.mass * half ** 2
+    pid = O.bodies.append(body)
+    proj = O.bodies[pid]
+    proj.state.mass = p.mass
+    proj.state.inertia = Vector3(inertia, inertia, inertia)
+    proj.state.vel = Vector3(0, 0, -p.V)
+    O.dt = g.stable_dt(p.dt_factor)
+    O.trackEnergy = True
+    steps_max = int(math.ceil(p.t_end / O.dt))
+    every = max(1, steps_max // p.samples)
+    node_ids = g.node_ids()
+    KE0 = 0.5 * p.mass * p.V ** 2
+    st = {'contact_seen': False, 'clear': 0, 'steady': 0, 'vz_ref': -p.V, 'outcome': 'running',
+          'min_nose': float('inf'), 'max_overlap': 0.0, 'released': 0.0, 'last_progress': time.time(), 'wall0': time.time()}
+    rows = []
+    law = [f for f in O.engines if isinstance(f, yade.wrapper.InteractionLoop)][0]
+
+    def projectile_contacts():
+        return sum(1 for i in O.interactions.withBody(pid) if i.isReal)
+
+    def check_breaks():
+        # a bond that broke since the last check took its elastic energy with it: released, as
+        # woven's books count it (its force was about E*A*eps_f when it went)
+        n = g.remove_broken()
+        if n:
+            st['released'] += n * 0.5 * (info['E'] * info['area'] * eps_f) ** 2 / float(np.mean(g.K[0]))
+
+    def sample():
+        ke_p = 0.5 * p.mass * proj.state.vel.squaredNorm()
+        ke_f = _kinetic(node_ids)
+        el_b, el_c = _elastic()
+        ov = g.max_overlap()
+        st['max_overlap'] = max(st['max_overlap'], ov)
+        dissip = sum(v for k, v in O.energy.items() if k in ('plastDissip', 'nonviscDamp', 'viscDamp'))
+        row = dict(t=O.time, vz=proj.state.vel[2], z=proj.state.pos[2], ke_projectile=ke_p, ke_fabric=ke_f,
+                   elastic_bonds=el_b, elastic_contacts=el_c, dissipated=dissip, released=st['released'],
+                   projectile_contacts=projectile_contacts(), broken=len(g.broken), overlap=ov,
+                   balance=(ke_p + ke_f + el_b + el_c + dissip + st['released'] - KE0) / KE0)
+        rows.append(row)
+
+    def watch():
+        st['min_nose'] = min(st['min_nose'], proj.state.pos[2] - half)
+        if O.iter % 10 == 0:
+            check_breaks()
+        nc = projectile_contacts()
+        if nc > 0:
+            st['contact_seen'], st['clear'] = True, 0
+        else:
+            st['clear'] += 1
+        vz = proj.state.vel[2]
+        if abs(vz - st['vz_ref']) > 1e-4 * p.V:
+            st['vz_ref'], st['steady'] = vz, 0
+        else:
+            st['steady'] += 1
+        through = proj.state.pos[2] + half < z_mid - 2 * g.radius
+        if st['contact_seen'] and through and (st['clear'] >= p.clear_steps or st['steady'] >= p.clear_steps):
+            st['outcome'] = 'perforated'
+        elif st['contact_seen'] and vz >= 0:
+            st['outcome'] = 'arrested'
+        if p.progress > 0 and time.time() - st['last_progress'] >= p.progress:
+            st['last_progress'] = time.time()
+            print('ballistic (yade grid): t = %.2f us of %.2f, vz = %.1f m/s, projectile contacts %d, broken %d, wall %.0f s'
+                  % (O.time * 1e6, p.t_end * 1e6, vz, nc, len(g.broken), time.time() - st['wall0']))
+            sys.stdout.flush()
+        if p.stop and st['outcome'] != 'running':
+            O.pause()
+
+    import __main__
+    __main__.grid_sample, __main__.grid_watch = sample, watch
+    O.engines = O.engines + [yade.wrapper.PyRunner(command='grid_watch()', iterPeriod=1),
+                             yade.wrapper.PyRunner(command='grid_sample()', iterPeriod=every)]
+    sample()
+    status = 'ok'
+    wall0 = time.time()
+    try:
+        O.run(steps_max, True)
+    except RuntimeError as ex:
+        status = 'failed'
+        print('ballistic (yade grid): run stopped:', ex)
+    wall = time.time() - wall0
+    check_breaks()
+    if st['outcome'] == 'running':
+        st['outcome'] = 'no perforation by t_end'
+    sample()
+    import os
+    keys = list(rows[0].keys())
+    S = np.array([[r[k] for k in keys] for r in rows])
+    np.savetxt(os.path.join(d, 'series.csv'), S, delimiter=',', comments='', header=','.join(keys))
+    v_res = -proj.state.vel[2]
+    ke_p = rows[-1]['ke_projectile']
+    perforated = st['outcome'] == 'perforated'
+    balance = rows[-1]['balance']
+    n_conn = sum(len(c) for c in g.connections)
+    measured = {
+        'model': 'yade', 'outcome': st['outcome'], 'perforated': perforated,
+        'residual_velocity': v_res if perforated else 0.0, 'projectile_velocity_end': v_res,
+        'absorbed_energy': KE0 - ke_p, 'energy_balance_error': balance,
+        'max_penetration': z_mid - st['min_nose'], 'broken_elements': len(g.broken),
+        'broken_yarns': len(set(y for y, _, _ in g.broken)),
+        'first_break_time': min((t for _, _, t in g.broken), default=None),
+        'simulated_time': O.time, 'steps': O.iter, 'dt': O.dt, 'yarns': len(g.nodes), 'grid_nodes': len(node_ids),
+        'grid_connections': n_conn, 'wall_seconds': wall, 'build_seconds': build_seconds,
+        'wall_seconds_per_simulated_us': wall / max(O.time * 1e6, 1e-30),
+        'max_yarn_penetration': st['max_overlap'], 'grid_radius': g.radius, 'kn': g.kn,
+        'fabric_mass': g.total_mass(), 'woven_fabric_mass': g.woven_mass,
+        'energy': {'projectile_initial': KE0, 'projectile_final': ke_p, 'fabric_kinetic': rows[-1]['ke_fabric'],
+                   'elastic_bonds': rows[-1]['elastic_bonds'], 'elastic_contacts': rows[-1]['elastic_contacts'],
+                   'dissipated': rows[-1]['dissipated'], 'released_breakage': st['released'],
+                   'yade_O_energy': dict(O.energy.items())},
+    }
+    reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],
+                 'smith_strain_at_V': theory.smith(p.V, info['E'], info['rho'])['strain'],
+                 'failure_strain': eps_f, 'woven_dt_crit': e.dt_crit}
+    units = {'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
+             'simulated_time': 's', 'dt': 's', 'wall_seconds': 's', 'build_seconds': 's', 'energy': 'J',
+             'wall_seconds_per_simulated_us': 's/us', 'energy_balance_error': "fraction of the projectile's initial kinetic energy",
+             'max_yarn_penetration': 'm', 'grid_radius': 'm', 'kn': 'N/m', 'fabric_mass': 'kg', 'woven_fabric_mass': 'kg',
+             'first_break_time': 's', 'woven_dt_crit': 's'}
+    checks = {'energy_balance': {'value': balance, 'limit': p.energy_limit, 'passed': bool(abs(balance) <= p.energy_limit),
+                                 'what': '(kinetic + elastic + dissipated + released - initial) / initial kinetic energy'},
+              'momentum_direction': {'value': v_res, 'limit': p.V, 'passed': bool(v_res <= p.V * (1 + 1e-9)),
+                                     'what': 'the fabric only slows the projectile'},
+              'mass': {'value': g.total_mass(), 'limit': g.woven_mass,
+                       'passed': bool(abs(g.total_mass() / g.woven_mass - 1) < 1e-9), 'what': 'grid node masses sum to the woven fabric mass'}}
+    if status == 'ok' and not all(c['passed'] for c in checks.values()):
+        status = 'failed'
+    write_summary(d, 'ballistic', p, measured, reference, units, status, checks)
+    what = ('perforated, residual velocity %.1f m/s' % v_res) if perforated else \
+        '%s (velocity %.1f m/s at t = %.1f us)' % (st['outcome'], v_res, O.time * 1e6)
+    print('ballistic (yade grid): %s; %s; absorbed %.4g J, energy balance error %.2g %%, broken %d bonds; '
+          'max grid overlap %.3g m; %.1f us in %.1f s (%d steps, dt %.3g s) -> %s'
+          % (status, what, KE0 - ke_p, 100 * balance, len(g.broken), st['max_overlap'], O.time * 1e6, wall, O.iter, O.dt, d))
+    return 0 if status == 'ok' else 1
