@@ -53,10 +53,17 @@ from . import arrays
 
 _O = yade.wrapper.Omega()
 
-# GridConnection derives from Sphere in YADE: a box would meet each connection as a sphere at its
-# first node. So a sphere projectile sees only the connections, a box only the nodes.
-CONNECTION_MASK = 1   # grid connections: meet each other and a sphere projectile
-NODE_MASK = 2         # grid nodes: meet only a box projectile (never each other: avoidSelfInteractionMask)
+# Masks. YADE's collider pairs two bodies when their masks share a bit, except two bodies of one
+# mask that shares a bit with avoidSelfInteractionMask. Warp connections (1|4) meet weft ones (1|8)
+# and a sphere projectile (1), never another warp connection: the connections of one yarn a few
+# l0/2 apart would otherwise touch (l0/2 < 2r at fine resolutions); contacts between neighbouring
+# yarns of one family are lost with them. GridConnection derives from Sphere in YADE, so a box
+# would meet each connection as a sphere at its first node: a box (2|16) meets only the nodes (2),
+# which never meet each other.
+CONNECTION_MASK = 1            # a sphere projectile's mask
+WARP_MASK, WEFT_MASK = 1 | 4, 1 | 8
+NODE_MASK = 2
+BOX_MASK = 2 | 16
 
 #: keys of the grid model in the scene scripts: (default, unit, description)
 GRID_KEYS = {
@@ -75,7 +82,7 @@ def engines(damping=0.0):
     return [
         ForceResetter(),
         InsertionSortCollider([Bo1_GridConnection_Aabb(), Bo1_Sphere_Aabb(), Bo1_Box_Aabb()],
-                              avoidSelfInteractionMask=NODE_MASK, label='gridCollider'),
+                              avoidSelfInteractionMask=2 | 4 | 8, label='gridCollider'),
         InteractionLoop(
             [Ig2_GridNode_GridNode_GridNodeGeom6D(), Ig2_GridConnection_GridConnection_GridCoGridCoGeom(),
              Ig2_Sphere_GridConnection_ScGridCoGeom(), Ig2_Box_Sphere_ScGeom()],
@@ -287,9 +294,10 @@ def build(engine, yarns, kn=0.0, radius=0.0, bending=False, failure_strain=0.0, 
             _O.bodies[i].mask = NODE_MASK
             _O.bodies[i].bounded = True  # a box projectile meets the nodes
         cids, ks = [], []
+        mask = WEFT_MASK if info['family'] == 'weft' else WARP_MASK
         for j in range(len(ids) - 1):
             cids.append(_O.bodies.append(gridConnection(ids[j], ids[j + 1], r, material=g.contact_material,
-                                                        mask=CONNECTION_MASK)))
+                                                        mask=mask)))
             it = _O.interactions[ids[j], ids[j + 1]]
             ks.append(it.phys.kn)
             if not bending:

@@ -89,7 +89,7 @@ def ballistic(p, d, weave_keys, contact_keys):
     mat = yg.projectile_material(g, p.shape, p.size)
     if p.shape == 'box':
         body = utils.box(start, (half, half, half), fixed=False, material=mat)
-        body.mask = yg.NODE_MASK | 4  # not equal to the nodes' mask: avoidSelfInteractionMask skips equal masks only
+        body.mask = yg.BOX_MASK
         inertia = p.mass * p.size ** 2 / 6
     else:
         body = utils.sphere(start, half, fixed=False, material=mat)
@@ -226,4 +226,94 @@ def ballistic(p, d, weave_keys, contact_keys):
     print('ballistic (yade grid): %s; %s; absorbed %.4g J, energy balance error %.2g %%, broken %d bonds; '
           'max grid overlap %.3g m; %.1f us in %.1f s (%d steps, dt %.3g s) -> %s'
           % (status, what, KE0 - ke_p, 100 * balance, len(g.broken), st['max_overlap'], O.time * 1e6, wall, O.iter, O.dt, d))
+    return 0 if status == 'ok' else 1
+
+
+def tension(p, d, weave_args):
+    """The tension scene of scripts/tension.py in grid elements: warp end nodes at x_min held, those at
+    x_max pulled along +x at p.velocity (ramped over p.ramp of the run); mode=biaxial pulls the weft
+    too. NewtonIntegrator's non-viscous damping is p.damping (YADE's analogue of woven's damping
+    ratio, not the same law). Writes curve.csv and summary.json; returns the exit status."""
+    import os
+    import woven
+    from .output import write_summary
+    O = _O
+    O.engines = []
+    O.bodies.clear()
+    O.interactions.clear()
+    w = woven.weave(**weave_args)
+    e = w.engine
+    O.engines = yg.engines(damping=p.damping)
+    g = yg.build(e, w.warp_yarns + w.weft_yarns, kn=p.kn, radius=p.grid_radius, bending=p.bending,
+                 friction=p.friction)
+    nw = len(w.warp_yarns)
+    strain_end = p.strain_end if p.strain_end > 0 else w.summary['warp_crimp_built'] + 0.003
+    pulled = [(range(nw), 0)] + ([(range(nw, len(g.nodes)), 1)] if p.mode == 'biaxial' else [])
+    first, last = [], []
+    for yarns, axis in pulled:
+        for k in yarns:
+            a, b = O.bodies[g.nodes[k][0]], O.bodies[g.nodes[k][-1]]
+            a.state.blockedDOFs = b.state.blockedDOFs = 'xyzXYZ'
+            a.state.vel = b.state.vel = Vector3(0, 0, 0)
+            if axis == 0:
+                first.append(g.nodes[k][0])
+                last.append(g.nodes[k][-1])
+    grips = [(g.nodes[k][-1], axis) for yarns, axis in pulled for k in yarns]
+
+    def xs(ids):
+        return float(np.mean([O.bodies[i].state.pos[0] for i in ids]))
+
+    L = xs(last) - xs(first)
+    t_run = strain_end * L / p.velocity * (1 + 0.5 * p.ramp)
+    t_ramp = p.ramp * strain_end * L / p.velocity
+    O.dt = g.stable_dt(p.dt_factor)
+    steps = int(math.ceil(t_run / O.dt))
+    every = max(1, steps // p.samples)
+    rows, st = [], {'max_overlap': 0.0}
+
+    def grip():
+        v = p.velocity * min(1.0, O.time / t_ramp) if t_ramp > 0 else p.velocity
+        for i, axis in grips:
+            O.bodies[i].state.vel = Vector3(v, 0, 0) if axis == 0 else Vector3(0, v, 0)
+
+    def sample():
+        ov = g.max_overlap()
+        st['max_overlap'] = max(st['max_overlap'], ov)
+        force = -sum(O.forces.f(i)[0] for i in last)  # the grips' reaction, positive in tension
+        rows.append((O.time, (xs(last) - xs(first)) / L - 1, force, ov))
+
+    import __main__
+    __main__.grid_grip, __main__.grid_tsample = grip, sample
+    O.engines = [yade.wrapper.PyRunner(command='grid_grip()', iterPeriod=1, initRun=True)] + O.engines + \
+        [yade.wrapper.PyRunner(command='grid_tsample()', iterPeriod=every)]
+    wall0 = time.time()
+    O.run(steps, True)
+    wall = time.time() - wall0
+    C = np.array(rows)
+    np.savetxt(os.path.join(d, 'curve.csv'), C, delimiter=',', comments='', header='time_s,strain,force_N,overlap_m')
+    info = e.yarn(w.warp_yarns[0])
+    EA = info['E'] * info['area']
+    eps, F = C[:, 1], C[:, 2]
+    span = eps.max() - eps.min()
+    fin = eps >= eps.max() - p.final_fit * span
+    kf, bf = np.polyfit(eps[fin], F[fin], 1)
+    toe = -bf / kf if kf > 0 else float('nan')
+    thickness = info['thickness']
+    measured = {'model': 'yade', 'steps': O.iter, 'dt': O.dt, 'strain_end': strain_end, 'grip_distance': L,
+                'strain_reached': float(eps.max()), 'force_end': float(F[-1]), 'toe_strain': toe, 'final_stiffness': kf,
+                'final_stiffness_per_straight_yarns': kf / (nw * EA), 'max_transient_penetration': st['max_overlap'],
+                'final_overlap': float(C[-1, 3]), 'grid_radius': g.radius, 'kn': g.kn, 'wall_seconds': wall,
+                'fabric_mass': g.total_mass(), 'woven_fabric_mass': g.woven_mass}
+    reference = {'warp_crimp_built': w.summary['warp_crimp_built'], 'straight_yarns_stiffness': nw * EA,
+                 'yarn_thickness': thickness, 'grid_diameter': 2 * g.radius}
+    units = {'grip_distance': 'm', 'force_end': 'N', 'final_stiffness': 'N', 'straight_yarns_stiffness': 'N',
+             'max_transient_penetration': 'm', 'final_overlap': 'm', 'grid_radius': 'm', 'kn': 'N/m', 'dt': 's',
+             'wall_seconds': 's', 'yarn_thickness': 'm', 'grid_diameter': 'm', 'fabric_mass': 'kg', 'woven_fabric_mass': 'kg'}
+    checks = {'final_overlap': {'value': measured['final_overlap'] / (2 * g.radius), 'limit': p.penetration_limit,
+                                'passed': bool(measured['final_overlap'] <= p.penetration_limit * 2 * g.radius),
+                                'what': 'largest grid-grid overlap at the end / grid diameter'}}
+    status = 'ok' if all(c['passed'] for c in checks.values()) else 'failed'
+    write_summary(d, 'tension', p, measured, reference, units, status, checks)
+    print('tension (yade grid): %s; toe %.3f %%, final / (n E A) %.3f, max overlap %.2g m (diameter %.2g m), '
+          '%d steps in %.1f s -> %s' % (status, 100 * toe, kf / (nw * EA), st['max_overlap'], 2 * g.radius, O.iter, wall, d))
     return 0 if status == 'ok' else 1
