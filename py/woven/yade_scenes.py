@@ -23,8 +23,9 @@ def check_model(p):
     """Raises ValueError naming the key when p['model'] is not 'woven' or 'yade'."""
     if p['model'] not in MODELS:
         raise ValueError("model = %r is invalid: allowed 'woven' or 'yade'" % p['model'])
-    if p['model'] == 'yade' and not (0 < p['dt_factor'] <= 1):
-        raise ValueError('dt_factor = %r is invalid: allowed (0, 1]' % p['dt_factor'])
+    # above 1 on purpose: the stability maps (scripts/compare.py) look for the blow-up
+    if p['model'] == 'yade' and not (0 < p['dt_factor'] <= 10):
+        raise ValueError('dt_factor = %r is invalid: allowed (0, 10]' % p['dt_factor'])
 
 
 def _kinetic(ids):
@@ -107,12 +108,25 @@ def ballistic(p, d, weave_keys, contact_keys):
     node_ids = g.node_ids()
     KE0 = 0.5 * p.mass * p.V ** 2
     st = {'contact_seen': False, 'clear': 0, 'steady': 0, 'vz_ref': -p.V, 'outcome': 'running',
-          'min_nose': float('inf'), 'max_overlap': 0.0, 'released': 0.0, 'last_progress': time.time(), 'wall0': time.time()}
+          'min_nose': float('inf'), 'max_overlap': 0.0, 'max_body': 0.0, 'unstable': '', 'released': 0.0, 'last_progress': time.time(), 'wall0': time.time()}
     rows = []
     law = [f for f in O.engines if isinstance(f, yade.wrapper.InteractionLoop)][0]
 
     def projectile_contacts():
-        return sum(1 for i in O.interactions.withBody(pid) if i.isReal)
+        """Number of real projectile contacts now; keeps the deepest one's penetrationDepth [m]."""
+        n = 0
+        for i in O.interactions.withBody(pid):
+            if i.isReal:
+                n += 1
+                st['max_body'] = max(st['max_body'], i.geom.penetrationDepth)
+        return n
+
+    def blow_up(why):
+        # the scene's 'unstable' status (woven's InstabilityError): stop at once
+        if not st['unstable']:
+            st['unstable'] = why
+            print('ballistic (yade grid): unstable at t = %.3g us: %s' % (O.time * 1e6, why))
+        O.pause()
 
     def check_breaks():
         # a bond that broke since the last check took its elastic energy with it: released, as
@@ -127,11 +141,25 @@ def ballistic(p, d, weave_keys, contact_keys):
         el_b, el_c = _elastic()
         ov = g.max_overlap()
         st['max_overlap'] = max(st['max_overlap'], ov)
-        dissip = sum(v for k, v in O.energy.items() if k in ('plastDissip', 'nonviscDamp', 'viscDamp'))
+        books = dict(O.energy.items())
+        dissip = sum(v for k, v in books.items() if k in ('plastDissip', 'nonviscDamp', 'viscDamp'))
+        # the balance from YADE's own books (O.trackEnergy: NewtonIntegrator's kinetic energy, the
+        # contact laws' elastPotential and dissipation) plus what they do not book: the elastic
+        # energy of the cohesive bonds and the energy the broken bonds took with them
+        kin = books.get('kinetic', ke_p + ke_f)  # empty before the first step
+        el_c_books = books.get('elastPotential', el_c)
+        balance = (kin + el_c_books + el_b + dissip + st['released'] - KE0) / KE0
+        # a blow-up: energy created, or (the fragile bonds break and cap the energy) a node faster
+        # than the largest speed a stable impact gives, a few times the projectile's
+        vmax = max(O.bodies[i].state.vel.norm() for i in node_ids)
+        if not (math.isfinite(balance) and math.isfinite(vmax)) or balance > 1:
+            blow_up('energy %s times the projectile\'s initial kinetic energy' % (balance + 1))
+        elif vmax > 5 * p.V:
+            blow_up('a grid node at %.3g m/s, %.3g times the impact speed' % (vmax, vmax / p.V))
         row = dict(t=O.time, vz=proj.state.vel[2], z=proj.state.pos[2], ke_projectile=ke_p, ke_fabric=ke_f,
                    elastic_bonds=el_b, elastic_contacts=el_c, dissipated=dissip, released=st['released'],
                    projectile_contacts=projectile_contacts(), broken=len(g.broken), overlap=ov,
-                   balance=(ke_p + ke_f + el_b + el_c + dissip + st['released'] - KE0) / KE0)
+                   balance_own=(ke_p + ke_f + el_b + el_c + dissip + st['released'] - KE0) / KE0, balance=balance)
         rows.append(row)
 
     def watch():
@@ -144,6 +172,9 @@ def ballistic(p, d, weave_keys, contact_keys):
         else:
             st['clear'] += 1
         vz = proj.state.vel[2]
+        if not (math.isfinite(vz) and abs(vz) < 10 * p.V):
+            blow_up('projectile velocity %s m/s' % vz)
+            return
         if abs(vz - st['vz_ref']) > 1e-4 * p.V:
             st['vz_ref'], st['steady'] = vz, 0
         else:
@@ -178,6 +209,8 @@ def ballistic(p, d, weave_keys, contact_keys):
     if st['outcome'] == 'running':
         st['outcome'] = 'no perforation by t_end'
     sample()
+    if st['unstable']:
+        status = 'unstable'
     import os
     keys = list(rows[0].keys())
     S = np.array([[r[k] for k in keys] for r in rows])
@@ -197,7 +230,8 @@ def ballistic(p, d, weave_keys, contact_keys):
         'simulated_time': O.time, 'steps': O.iter, 'dt': O.dt, 'yarns': len(g.nodes), 'grid_nodes': len(node_ids),
         'grid_connections': n_conn, 'wall_seconds': wall, 'build_seconds': build_seconds,
         'wall_seconds_per_simulated_us': wall / max(O.time * 1e6, 1e-30),
-        'max_yarn_penetration': st['max_overlap'], 'grid_radius': g.radius, 'kn': g.kn,
+        'max_yarn_penetration': st['max_overlap'], 'max_body_penetration': st['max_body'], 'cps': n_conn,
+        'yarn_thickness': info['thickness'], 'unstable_why': st['unstable'] or None, 'grid_radius': g.radius, 'kn': g.kn,
         'fabric_mass': g.total_mass(), 'woven_fabric_mass': g.woven_mass,
         'energy': {'projectile_initial': KE0, 'projectile_final': ke_p, 'fabric_kinetic': rows[-1]['ke_fabric'],
                    'elastic_bonds': rows[-1]['elastic_bonds'], 'elastic_contacts': rows[-1]['elastic_contacts'],
@@ -210,10 +244,11 @@ def ballistic(p, d, weave_keys, contact_keys):
     units = {'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
              'simulated_time': 's', 'dt': 's', 'wall_seconds': 's', 'build_seconds': 's', 'energy': 'J',
              'wall_seconds_per_simulated_us': 's/us', 'energy_balance_error': "fraction of the projectile's initial kinetic energy",
-             'max_yarn_penetration': 'm', 'grid_radius': 'm', 'kn': 'N/m', 'fabric_mass': 'kg', 'woven_fabric_mass': 'kg',
+             'max_yarn_penetration': 'm', 'max_body_penetration': 'm', 'yarn_thickness': 'm', 'grid_radius': 'm', 'kn': 'N/m', 'fabric_mass': 'kg', 'woven_fabric_mass': 'kg',
              'first_break_time': 's', 'woven_dt_crit': 's'}
     checks = {'energy_balance': {'value': balance, 'limit': p.energy_limit, 'passed': bool(abs(balance) <= p.energy_limit),
-                                 'what': '(kinetic + elastic + dissipated + released - initial) / initial kinetic energy'},
+                                 'what': '(O.energy kinetic + elastPotential + dissipated, + bond elastic + released '
+                                         '- initial) / initial kinetic energy'},
               'momentum_direction': {'value': v_res, 'limit': p.V, 'passed': bool(v_res <= p.V * (1 + 1e-9)),
                                      'what': 'the fabric only slows the projectile'},
               'mass': {'value': g.total_mass(), 'limit': g.woven_mass,
