@@ -137,3 +137,27 @@ def test_ballistic_grid_quick(tmp_path):
     assert abs(m['energy_balance_error']) < 0.01
     assert 0 < m['absorbed_energy'] < 0.5 * 1.1e-3 * 200 ** 2
     assert m['dt'] < s['reference']['woven_dt_crit']
+    # the keys scripts/compare.py reads, measured: the sphere (2r = 5.59 mm) touched the yarns and
+    # overlapped them by less than their diameter
+    assert 0 < m['max_body_penetration'] < 2 * m['grid_radius']
+    assert 0 < m['max_yarn_penetration'] < 2 * m['grid_radius']
+    assert m['cps'] == m['grid_connections'] and m['yarn_thickness'] > 0 and m['max_penetration'] > 0
+
+
+def test_smith_grid_chain_against_theory(tmp_path):
+    """Smith's single-yarn impact as a grid chain: strain within 1 %, transverse wave speed within
+    3 % of the theory at 1000 elements, and the driver's work in kinetic + bond energy within 1 %."""
+    rc, log, s = run_scene('smith.py', tmp_path, 'model=yade', 'elements=1000', 'levels=1')
+    assert rc == 0, log
+    c = s['measured']['convergence'][0]
+    assert abs(c['strain_error']) < 0.01 and abs(c['U_E_error']) < 0.03
+    assert abs(c['energy_balance_error']) < 0.01
+
+
+def test_ballistic_grid_blow_up_is_unstable(tmp_path):
+    """Three times the critical step: the scene stops with status 'unstable' (what the stability map
+    reads), not with a summary of garbage."""
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'model=yade', 'side=0.00635', 't_end=8e-6', 'size=1.5e-3',
+                           'mass=0.05e-3', 'dt_factor=3', 'stop=0', 'vtk_every=-1', 'progress=0')
+    assert rc != 0 and s is not None and s['status'] == 'unstable', log
+    assert s['measured']['simulated_time'] < 8e-6
