@@ -161,3 +161,25 @@ def test_ballistic_grid_blow_up_is_unstable(tmp_path):
                            'mass=0.05e-3', 'dt_factor=3', 'stop=0', 'vtk_every=-1', 'progress=0')
     assert rc != 0 and s is not None and s['status'] == 'unstable', log
     assert s['measured']['simulated_time'] < 8e-6
+
+
+def test_smith_in_grid_elements(tmp_path):
+    """Smith's transverse impact of one yarn as YADE grid bonds: the strain behind the front and the
+    lab-frame transverse wave speed agree with theory (1 % and 3 %)."""
+    rc, log, s = run_scene('smith.py', tmp_path, 'model=yade', 'elements=2000', 'levels=1')
+    assert rc == 0, log
+    m, ref = s['measured'], s['reference']
+    assert m['strain'] == pytest.approx(ref['strain'], rel=0.01)
+    assert m['U_E'] == pytest.approx(ref['U_E'], rel=0.03)
+
+
+def test_tension_in_grid_elements(tmp_path):
+    """The tension scene as grid elements: the straightened warp carries n E A (within 5 %), after a
+    toe below woven's built crimp (the chords cut part of it), with the yarns kept apart."""
+    rc, log, s = run_scene('tension.py', tmp_path, 'model=yade', 'nx=2', 'ny=2', 'samples=60')
+    assert rc == 0, log
+    m, ref = s['measured'], s['reference']
+    assert m['final_stiffness'] == pytest.approx(ref['straight_yarns_stiffness'], rel=0.05)
+    assert 0 < m['toe_strain'] < ref['warp_crimp_built']
+    assert m['fabric_mass'] == pytest.approx(m['woven_fabric_mass'], rel=1e-9)
+    assert m['max_transient_penetration'] < 0.05 * ref['grid_diameter']
