@@ -163,16 +163,6 @@ def test_ballistic_grid_blow_up_is_unstable(tmp_path):
     assert s['measured']['simulated_time'] < 8e-6
 
 
-def test_smith_in_grid_elements(tmp_path):
-    """Smith's transverse impact of one yarn as YADE grid bonds: the strain behind the front and the
-    lab-frame transverse wave speed agree with theory (1 % and 3 %)."""
-    rc, log, s = run_scene('smith.py', tmp_path, 'model=yade', 'elements=2000', 'levels=1')
-    assert rc == 0, log
-    m, ref = s['measured'], s['reference']
-    assert m['strain'] == pytest.approx(ref['strain'], rel=0.01)
-    assert m['U_E'] == pytest.approx(ref['U_E'], rel=0.03)
-
-
 def test_tension_in_grid_elements(tmp_path):
     """The tension scene as grid elements: the straightened warp carries n E A (within 5 %), after a
     toe below woven's built crimp (the chords cut part of it), with the yarns kept apart."""
