@@ -24,6 +24,8 @@ from woven.weave import WEAVE_KEYS
 from woven.contact import CONTACT_KEYS
 from yade import plot, utils
 import woven.ballistic
+import woven.yade_grid
+import woven.yade_scenes
 
 defaults = dict(WEAVE_KEYS)
 defaults.update({
@@ -65,8 +67,11 @@ defaults.update({
     'progress': (5.0, 's', 'wall time between progress lines (0: none)'),
     'energy_limit': (0.01, '', 'allowed energy-balance error / initial kinetic energy'),
     'out': ('', '', 'output folder (default out/ballistic)'),
+    'model': ('woven', '', "'woven', or 'yade': the same ply in YADE's grid elements (woven.yade_grid, docs/yade_grid.md)"),
 })
+defaults.update(woven.yade_grid.GRID_KEYS)
 p = read_params(defaults)
+woven.yade_scenes.check_model(p)
 
 # --- input checks: every bad value names its key and the allowed range, before anything is built ---
 def bad(key, allowed):
@@ -100,6 +105,8 @@ if p.vtk_every < -1:
 if p.mirror_every < 0:
     bad('mirror_every', '0 (off) or a step count')
 d = out_dir('ballistic', p)
+if p.model == 'yade':
+    sys.exit(woven.yade_scenes.ballistic(p, d, WEAVE_KEYS, CONTACT_KEYS))
 
 # --- the ply and the projectile (an ordinary YADE body) ---
 O.engines = []
