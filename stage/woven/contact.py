@@ -1,0 +1,37 @@
+"""Collision handling, Python face: the parameter table shared by scene scripts and yade-batch tables.
+
+    woven.contact.enable(engine, mcd=0.6, restitution=0)   # same keys as CONTACT_KEYS, SI units
+"""
+
+# key: (default, unit, description); the keys of FabricEngine.enable_collisions.
+CONTACT_KEYS = {
+    'restitution': (0.0, '', 'coefficient of restitution e of Eq. 5, in [0, 1]'),
+    'friction': (0.0, '', 'Coulomb coefficient between yarns, >= 0 (0 as in the paper)'),
+    'mcd': (0.6, '', 'maximum cross-sectional deformation eps = 1 - b/r0, in (0, 1)'),
+    'section_rule': ('constant_area', '', "flattening: 'constant_area' (a*b = r0^2) or 'paper' (a = r0(1+eps))"),
+    'margin': (1e-6, 'm', 'added to each side of a CP box: contacts start this close'),
+    'tolerance': (1e-6, 'm/s', 'Eq. 4 resting band and impulse solver tolerance'),
+    'max_iterations': (50, '', 'impulse sweeps per step at most'),
+    'flatten_passes': (4, '', 'flattening re-tests per step'),
+    'position_correction': (0.2, '', 'fraction of a locked overlap removed per step, in [0, 1]'),
+    'correction_slop': (0.5e-6, 'm', 'overlap the positional correction leaves alone'),
+    'self_exclude': (1, '', 'CPs of one yarn this many elements apart never collide (raised to the section size)'),
+    'broad_phase': ('tree', '', "'tree' (OBB tree per yarn), 'grid' (uniform grid of cells) or 'sap' (sweep and prune)"),
+    'skin': (5e-6, 'm', 'Verlet skin: candidate pairs are kept while every CP box stays inside its box grown by this'),
+    'threads': (1, '', 'threads of the narrow phase (same contacts, bit for bit, for any count)'),
+    'contact_cache': (1e-7, 'm', 'a contact is carried to the next step while its four nodes move together to within this (0: test every pair every step)'),
+    'yarn_contacts': (True, '', 'contacts between yarns (False: only with rigid bodies; yarns pass through each other)'),
+}
+
+
+def enable(engine, **kw):
+    """Turns collision handling on for `engine` with CONTACT_KEYS (others are refused)."""
+    bad = sorted(set(kw) - set(CONTACT_KEYS))
+    if bad:
+        raise ValueError('unknown contact key(s) %s: allowed %s' % (', '.join(bad), ', '.join(sorted(CONTACT_KEYS))))
+    args = {k: kw.get(k, v[0]) for k, v in CONTACT_KEYS.items()}
+    for k in ('max_iterations', 'flatten_passes', 'self_exclude', 'threads'):
+        args[k] = int(args[k])
+    args['yarn_contacts'] = bool(int(args['yarn_contacts'])) if not isinstance(args['yarn_contacts'], bool) else args['yarn_contacts']
+    engine.enable_collisions(**args)
+    return engine

@@ -1,0 +1,70 @@
+"""YADE bodies that collide with the fabric: a projectile, clamps, any Box, Sphere or clump of these.
+
+    pid = O.bodies.append(utils.box(centre, half_extents))
+    woven.coupling.couple(engine, [pid])     # before woven.attach(engine)
+
+YADE keeps owning and integrating the bodies (its NewtonIntegrator must run before the woven
+adapter, which attach ensures by appending it); each step the adapter reads their pose and
+velocities, the fabric's collision stage gives them and the yarns the same impulses (opposite signs,
+with the body's mass and inertia), and their new velocities and pose are written back. The cost is a
+few attribute reads and writes per body per step, nothing per yarn node. Units SI.
+"""
+import math
+import yade.wrapper
+from yade._minieigenHP import Quaternion, Vector3
+
+_O = yade.wrapper.Omega()
+
+
+def _parts_of(body):
+    """[('box', half_extents, offset, ori) | ('sphere', radius, offset, ori)] in the body's frame."""
+    shape = body.shape
+    kind = type(shape).__name__
+    I = Quaternion.Identity
+    zero = Vector3.Zero
+    if kind == 'Box':
+        return [('box', shape.extents, zero, I)]
+    if kind == 'Sphere':
+        return [('sphere', shape.radius, zero, I)]
+    if kind == 'Clump':
+        parts = []
+        for mid, (rel_pos, rel_ori) in sorted(shape.members.items()):
+            sub = _parts_of(_O.bodies[mid])
+            parts += [(k, size, rel_pos + rel_ori * off, rel_ori * ori) for (k, size, off, ori) in sub]
+        return parts
+    raise ValueError('body %d has shape %s: woven collides yarns with Box, Sphere and clumps of these' % (body.id, kind))
+
+
+def couple(engine, ids):
+    """Makes the YADE bodies `ids` collide with the fabric of `engine` (collisions must be on).
+
+    A body that YADE does not integrate (b.dynamic False) is kinematic for the fabric: impulses do
+    not change its motion. Returns the woven body indices. Raises ValueError for an unknown id, a
+    shape other than Box/Sphere/Clump, non-positive mass of a dynamic body, non-finite velocity,
+    or a body that starts inside the fabric.
+    """
+    if not engine.collisions_enabled:
+        raise ValueError('collisions = off is invalid: allowed on (woven.contact.enable(engine) before couple)')
+    out = []
+    for i in ids:
+        if not (0 <= i < len(_O.bodies)) or _O.bodies[i] is None:
+            raise ValueError('body id = %r is invalid: allowed an id of O.bodies (0..%d)' % (i, len(_O.bodies) - 1))
+        b = _O.bodies[i]
+        if b.clumpId >= 0 and b.clumpId != b.id:
+            raise ValueError('body id = %d is invalid: it is a member of clump %d; couple the clump' % (i, b.clumpId))
+        s = b.state
+        for name in ('vel', 'angVel', 'pos'):
+            v = getattr(s, name)
+            if not all(math.isfinite(c) for c in v):
+                raise ValueError('%s = %s of body %d is invalid: allowed finite values (SI)' % (name, v, i))
+        mass = s.mass if b.dynamic else 0.0
+        if b.dynamic and not (s.mass > 0 and math.isfinite(s.mass)):
+            raise ValueError('mass = %r of body %d is invalid: allowed (0, inf) kg for a dynamic body' % (s.mass, i))
+        k = engine.add_body(i, _parts_of(b), mass, s.inertia, s.pos, s.ori, s.vel, s.angVel)
+        overlap = engine.body_overlap(k)
+        if overlap > 0:
+            engine.pop_body()
+            raise ValueError('body %d starts inside the fabric (overlap %.3g m): allowed a start clear of every '
+                             'yarn' % (i, overlap))
+        out.append(k)
+    return out

@@ -1,0 +1,72 @@
+"""The YADE side of a FabricEngine: one woven step per YADE iteration, with YADE's O.dt.
+
+YADE's C++ Engine cannot be subclassed here (Debian ships no YADE headers), so the adapter is a
+PyRunner with iterPeriod=1 whose command calls the C++ step with O.dt: about 30-45 us of Python per
+iteration (measured with `yade -n -x scripts/bench_pyrunner.py`), independent of the fabric size.
+O.time and O.iter stay the clock; the fabric's own step counter must follow O.iter.
+
+YADE bodies coupled to the fabric (woven.coupling.couple) are read before and written after each
+step; the adapter must run after YADE's NewtonIntegrator (attach appends it at the end), which has
+moved them from x_n to x_n + dt v already: the step takes them back to x_n, resolves the contacts
+with the fabric on the same (x_n, v_{n+1/2}) as the yarns, and moves them with the new velocities.
+"""
+import yade.wrapper
+
+_O = yade.wrapper.Omega()
+_registry = {}
+last_error = None  #: the last exception a woven step raised (InstabilityError keeps step, node, cause)
+
+
+def _step(key):
+    global last_error
+    engine, rewind = _registry[key]
+    try:
+        if engine.n_bodies:
+            # Coupled YADE bodies: their state in, one step, their new state out (C++, a few
+            # attribute reads and writes per body; none per node).
+            engine._yade_step(_O.dt, _O.bodies, rewind)
+        else:
+            engine.step(_O.dt)
+    except Exception as e:
+        last_error = e
+        raise
+
+
+def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
+    """Puts `engine` (a woven.FabricEngine) into O.engines and returns the PyRunner that drives it.
+
+    set_dt: set O.dt = safety * engine.dt_crit [s] (safety in (0, 1]; 0.7 by default because slack/taut
+            switching of tension-only yarns gains energy near dt_crit, docs/design.md); otherwise O.dt must already
+            be <= engine.dt_crit, else ValueError naming dt and the allowed range (before any step).
+    label:  YADE label of the PyRunner.
+    append: add to the end of O.engines (else the caller places the returned PyRunner).
+    """
+    steppers = [type(e).__name__ for e in _O.engines
+                 if isinstance(e, yade.wrapper.TimeStepper) and not e.dead]
+    if steppers:
+        raise ValueError('O.engines holds %s, which changes O.dt; woven needs O.dt <= dt_crit: set '
+                         'O.engines yourself (a fresh scene has YADE\'s defaults) or make it dead' % ', '.join(steppers))
+    if not (0 < safety <= 1):
+        raise ValueError('safety = %r is invalid: allowed (0, 1]' % (safety,))
+    if set_dt:
+        _O.dt = safety * engine.dt_crit
+    elif not (0 < _O.dt <= engine.dt_crit * (1 + 1e-12)):
+        raise ValueError('dt = %.12g is invalid: allowed (0, dt_crit = %.12g] s (stable limit of the chain; '
+                         'set O.dt below it or attach(..., set_dt=True))' % (_O.dt, engine.dt_crit))
+    key = len(_registry)
+    # Bodies coupled to the fabric (woven.coupling) were already moved over this iteration's step
+    # when a NewtonIntegrator runs before the adapter: the step rewinds them to x_n first.
+    newton = [i for i, e in enumerate(_O.engines) if isinstance(e, yade.wrapper.NewtonIntegrator) and not e.dead]
+    rewind = bool(newton) and append
+    _registry[key] = (engine, rewind)
+    # PyRunner compiles its command every iteration: keep it short (a name put into __main__, where
+    # YADE runs PyRunner commands, and a small key): measured 60-70 -> 40-45 us per iteration.
+    import __main__
+    __main__.__dict__['_woven_step'] = _step
+    runner = yade.wrapper.PyRunner(command='_woven_step(%d)' % key, iterPeriod=1)
+    runner.initRun = True  # also at O.iter 0, so the fabric's steps equal O.iter (a constructor keyword is ignored)
+    if label:
+        runner.label = label
+    if append:
+        _O.engines = list(_O.engines) + [runner]
+    return runner

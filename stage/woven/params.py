@@ -1,0 +1,82 @@
+"""Scene parameters: `key=value` on the command line and the same keys from yade-batch tables.
+
+    p = read_params({'V': (200.0, 'm/s', 'impact speed'), ...})
+
+Each default is (value, unit, description); the value's type (float, int, bool, str) is the type
+the key is read as. Precedence: defaults < yade-batch table line (YADE_BATCH) < command line.
+Unknown keys and unparsable values raise ValueError naming the key and what is allowed.
+"""
+import os
+import sys
+
+
+class Params(dict):
+    """dict with attribute access; .units and .docs hold each key's unit and description."""
+
+    def __getattr__(self, k):
+        try:
+            return self[k]
+        except KeyError:
+            raise AttributeError(k)
+
+
+def _convert(key, text, default):
+    t = text.strip()
+    if len(t) >= 2 and t[0] == t[-1] and t[0] in '"\'':
+        t = t[1:-1]
+    try:
+        if isinstance(default, bool):
+            low = t.lower()
+            if low in ('1', 'true', 'yes', 'on'):
+                return True
+            if low in ('0', 'false', 'no', 'off'):
+                return False
+            raise ValueError
+        if isinstance(default, int):
+            f = float(t)
+            if f != int(f):
+                raise ValueError
+            return int(f)
+        if isinstance(default, float):
+            return float(t)
+        if default is None:  # no default: a number if it reads as one, else text
+            for cast in (int, float):
+                try:
+                    return cast(t)
+                except ValueError:
+                    pass
+        return t
+    except ValueError:
+        kind = {bool: '0/1/true/false', int: 'an integer', float: 'a number'}.get(type(default), 'text')
+        raise ValueError('%s = %r is invalid: allowed %s' % (key, text, kind)) from None
+
+
+def _batch_line():
+    """The parameters of this yade-batch job (column -> text), or {} outside yade-batch."""
+    spec = os.environ.get('YADE_BATCH', '')
+    if not spec:
+        return {}
+    from yade.utils import TableParamReader
+    table, line = spec.rsplit(':', 1)
+    row = TableParamReader(table).paramDict()[int(line)]
+    return {k: v for k, v in row.items() if k != 'description' and not k.startswith('!')}
+
+
+def read_params(defaults, argv=None):
+    """defaults: {key: (value, unit, description)}; argv: list of 'key=value' (default sys.argv[1:])."""
+    if argv is None:
+        argv = sys.argv[1:]
+    p = Params({k: v[0] for k, v in defaults.items()})
+    p.units = {k: v[1] for k, v in defaults.items()}
+    p.docs = {k: v[2] for k, v in defaults.items()}
+    given = dict(_batch_line())
+    for a in argv:
+        if '=' not in a:
+            raise ValueError('argument %r is invalid: allowed key=value with key one of %s' % (a, ', '.join(sorted(defaults))))
+        k, v = a.split('=', 1)
+        given[k.strip()] = v
+    for k, v in given.items():
+        if k not in defaults:
+            raise ValueError('unknown parameter %r: allowed keys are %s' % (k, ', '.join(sorted(defaults))))
+        p[k] = _convert(k, v, defaults[k][0]) if isinstance(v, str) else v
+    return p

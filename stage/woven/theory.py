@@ -1,0 +1,85 @@
+"""Closed-form references the scenes are checked against (physics-reference.md). SI units."""
+import math
+
+
+def smith(V, E, rho):
+    """Smith's transverse impact of a yarn at speed V [m/s] (Smith, McCrackin & Schiefer 1958).
+
+    Solves V = c*sqrt(2*eps*sqrt(eps*(1+eps)) - eps^2) for eps by bisection (monotonic), c = sqrt(E/rho).
+    Returns dict: c [m/s], strain [-], w = c*eps [m/s] (material flow), U_L = c*sqrt(eps/(1+eps))
+    [m/s] (material frame) and U_E = c*(sqrt(eps*(1+eps)) - eps) [m/s] (lab frame).
+    """
+    if not (E > 0 and rho > 0 and V > 0 and math.isfinite(V)):
+        raise ValueError('smith: need E > 0 Pa, rho > 0 kg/m^3, V > 0 m/s; got %r, %r, %r' % (E, rho, V))
+    c = math.sqrt(E / rho)
+
+    def speed(e):
+        return c * math.sqrt(max(2 * e * math.sqrt(e * (1 + e)) - e * e, 0.0))
+
+    lo, hi = 0.0, 1.0
+    if speed(hi) < V:
+        raise ValueError('smith: V = %g m/s exceeds the model range (strain > 100 %%)' % V)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if speed(mid) < V:
+            lo = mid
+        else:
+            hi = mid
+    e = 0.5 * (lo + hi)
+    return {'c': c, 'strain': e, 'w': c * e, 'U_L': c * math.sqrt(e / (1 + e)),
+            'U_E': c * (math.sqrt(e * (1 + e)) - e)}
+
+
+def smith_critical_velocity(failure_strain, E, rho):
+    """Impact speed [m/s] at which the strain behind the front reaches failure_strain."""
+    c = math.sqrt(E / rho)
+    e = failure_strain
+    return c * math.sqrt(2 * e * math.sqrt(e * (1 + e)) - e * e)
+
+
+def areal_density_plain(linear_density_warp, spacing_warp, crimp_warp, linear_density_weft, spacing_weft, crimp_weft):
+    """Areal density [kg/m^2] of a woven fabric: sum over families of lambda*(1 + crimp)/spacing."""
+    return (linear_density_warp * (1 + crimp_warp) / spacing_warp
+            + linear_density_weft * (1 + crimp_weft) / spacing_weft)
+
+
+def lambert_jonas(V, V_bl, a, p):
+    """Lambert-Jonas residual velocity [m/s]: a (V^p - V_bl^p)^(1/p) above the ballistic limit V_bl
+    [m/s], 0 below it (Lambert & Jonas, BRL R-1852, 1976)."""
+    import numpy as np
+    V = np.asarray(V, dtype=float)
+    return np.where(V > V_bl, a * np.maximum(V ** p - V_bl ** p, 0.0) ** (1.0 / p), 0.0)
+
+
+def fit_lambert_jonas(V, vr, p_range=(1.0, 4.0)):
+    """Least-squares Lambert-Jonas fit of residual velocities vr [m/s] (0 where the projectile was
+    stopped) against impact velocities V [m/s]: for each ballistic limit V_bl on a grid below the
+    largest V and each exponent p in p_range, a follows in closed form (linear least squares, held
+    within (0, 1]: a projectile never leaves faster than it came); the
+    best pair is refined on a finer grid. Returns dict V_bl (the V50 the fit gives) [m/s], a [-], p
+    [-], rms [m/s]. Raises ValueError with fewer than 3 points or no perforation at all."""
+    import numpy as np
+    V = np.asarray(V, dtype=float)
+    vr = np.asarray(vr, dtype=float)
+    if len(V) < 3 or len(V) != len(vr):
+        raise ValueError('runs = %d is invalid: allowed at least 3 (V, residual velocity) pairs' % len(V))
+    if not np.any(vr > 0):
+        raise ValueError('residual velocities are all 0: no run perforated, the V50 lies above %.1f m/s' % V.max())
+
+    def best(vbl_grid, p_grid):
+        out = None
+        for p in p_grid:
+            for vbl in vbl_grid:
+                g = np.where(V > vbl, np.maximum(V ** p - vbl ** p, 0.0) ** (1.0 / p), 0.0)
+                gg = float(g @ g)
+                a = min(max(float(g @ vr) / gg, 0.0), 1.0) if gg > 0 else 0.0  # 0 < a <= 1: v_r <= V
+                sse = float(np.sum((a * g - vr) ** 2))
+                if out is None or sse < out[0]:
+                    out = (sse, vbl, a, p)
+        return out
+    top = V.max()
+    sse, vbl, a, p = best(np.linspace(0, top, 401)[:-1], np.linspace(p_range[0], p_range[1], 31))
+    step_v, step_p = top / 400, (p_range[1] - p_range[0]) / 30
+    sse, vbl, a, p = best(np.linspace(max(0, vbl - step_v), min(top, vbl + step_v), 81),
+                          np.linspace(max(p_range[0], p - step_p), min(p_range[1], p + step_p), 21))
+    return {'V_bl': vbl, 'a': a, 'p': p, 'rms': math.sqrt(sse / len(V))}

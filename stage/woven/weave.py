@@ -1,0 +1,139 @@
+"""Weave builder, Python face: keys in SI, a preset, a pattern by name or as a 0/1 matrix.
+
+    w = woven.weave(preset='km2_706', nx=5, ny=5, cp_per_span=4)
+    w.engine       # woven.FabricEngine
+    w.summary      # dict of measured figures (areal density, crimp, clearances, counts)
+"""
+from . import _woven
+
+# key: (default, unit, description). None = keep the preset's value.
+WEAVE_KEYS = {
+    'preset': ('km2_706', '', "'km2_706' or 'none' (then give every material and section key)"),
+    'pattern': ('plain', '', "plain, twill, satin, basket, or a 0/1 matrix '1,0;0,1' (1 = warp over weft)"),
+    'twill_over': (2, '', 'twill: wefts each warp passes over'),
+    'twill_under': (1, '', 'twill: wefts each warp passes under'),
+    'satin_n': (5, '', 'satin: harnesses'),
+    'satin_step': (2, '', 'satin: move number'),
+    'basket_n': (2, '', 'basket: yarns per group'),
+    'nx': (1, '', 'repeats of the pattern along x (weft yarns = nx * pattern columns)'),
+    'ny': (1, '', 'repeats of the pattern along y (warp yarns = ny * pattern rows)'),
+    'spacing': (None, 'm', 'centre distance of neighbouring yarns, both families'),
+    'warp_spacing': (None, 'm', 'centre distance of neighbouring warp yarns'),
+    'weft_spacing': (None, 'm', 'centre distance of neighbouring weft yarns'),
+    'width': (None, 'm', 'yarn width, both families'),
+    'thickness': (None, 'm', 'yarn thickness, both families'),
+    'E': (None, 'Pa', "Young's modulus of the fibre"),
+    'rho': (None, 'kg/m^3', 'fibre density'),
+    'area': (None, 'm^2', 'fibre cross-section area of a yarn'),
+    'linear_density': (None, 'kg/m', 'yarn linear density (sets area = linear_density/rho)'),
+    'damping': (None, '', 'damping ratio of the highest chain mode (c = xi*sqrt(K*m_e))'),
+    'failure_strain': (None, '', 'strain at break'),
+    'tension_only': (None, '', 'yarns carry no compression (1) or do (0)'),
+    'crimp': (None, '', 'crimp of both families; < 0 = Peirce with touching yarns'),
+    'warp_crimp': (None, '', 'warp crimp; < 0 = Peirce'),
+    'weft_crimp': (None, '', 'weft crimp; < 0 = Peirce'),
+    'cp_per_span': (None, '', 'CPs between neighbouring crossings (>= 1); inside fine_radius when adaptive'),
+    'fine_radius': (None, 'm', 'adaptive resolution: spans within this distance of (fine_x, fine_y) get cp_per_span '
+                    'CPs, the others cp_coarse; < 0: uniform cp_per_span'),
+    'cp_coarse': (None, '', 'CPs between crossings outside fine_radius, [1, cp_per_span]'),
+    'fine_x': (None, 'm', 'x of the fine centre (default: the middle of the fabric)'),
+    'fine_y': (None, 'm', 'y of the fine centre (default: the middle of the fabric)'),
+}
+
+
+def pattern(name='plain', twill_over=2, twill_under=1, satin_n=5, satin_step=2, basket_n=2):
+    """A woven.Pattern from a name or a matrix (list of lists, or text '1,0;0,1')."""
+    if isinstance(name, (list, tuple)):
+        return _woven.Pattern([list(map(int, r)) for r in name])
+    if isinstance(name, str) and (';' in name or ',' in name):
+        rows = [r for r in name.replace(' ', '').split(';') if r]
+        try:
+            return _woven.Pattern([[int(v) for v in r.split(',')] for r in rows])
+        except ValueError:
+            raise ValueError("pattern = %r is invalid: allowed a 0/1 matrix written '1,0;0,1'" % name) from None
+    if name == 'twill':
+        return _woven.Pattern.twill(twill_over, twill_under)
+    if name == 'satin':
+        return _woven.Pattern.satin(satin_n, satin_step)
+    if name == 'basket':
+        return _woven.Pattern.basket(basket_n)
+    return _woven.Pattern.by_name(name)
+
+
+class Weave:
+    """A built weave: .engine (FabricEngine), .summary (dict), .warp_yarns, .weft_yarns, .params."""
+
+    def __init__(self, engine, summary, warp, weft, params, pattern):
+        self.engine, self.summary, self.warp_yarns, self.weft_yarns = engine, summary, warp, weft
+        self.params, self.pattern = params, pattern
+
+
+def _summary_dict(s):
+    return {
+        'warp_yarns': s.warp_yarns, 'weft_yarns': s.weft_yarns, 'nodes': s.nodes, 'elements': s.elements,
+        'spans': s.spans, 'fine_spans': s.fine_spans, 'min_element_length': s.min_element_length,
+        'areal_density': s.areal_density,
+        'warp_crimp_peirce': s.warp_peirce.crimp, 'weft_crimp_peirce': s.weft_peirce.crimp,
+        'warp_crimp_built': s.warp_crimp_built, 'weft_crimp_built': s.weft_crimp_built,
+        'warp_crimp_height': s.warp_peirce.h, 'weft_crimp_height': s.weft_peirce.h,
+        'warp_weave_angle': s.warp_peirce.theta, 'weft_weave_angle': s.weft_peirce.theta,
+        'required_gap': s.required_gap, 'min_vertical_gap': s.min_vertical_gap,
+        'min_chain_clearance': s.min_chain_clearance, 'length_x': s.length_x, 'length_y': s.length_y,
+    }
+
+
+SUMMARY_UNITS = {
+    'areal_density': 'kg/m^2', 'warp_crimp_height': 'm', 'weft_crimp_height': 'm', 'warp_weave_angle': 'rad',
+    'weft_weave_angle': 'rad', 'required_gap': 'm', 'min_vertical_gap': 'm', 'min_chain_clearance': 'm',
+    'length_x': 'm', 'length_y': 'm', 'min_element_length': 'm',
+}
+
+
+def weave(**kw):
+    """Builds a weave from WEAVE_KEYS (SI units); unknown keys raise ValueError naming them."""
+    for k in kw:
+        if k not in WEAVE_KEYS:
+            raise ValueError('unknown weave parameter %r: allowed keys are %s' % (k, ', '.join(sorted(WEAVE_KEYS))))
+    a = {k: (kw[k] if kw.get(k) is not None else v[0]) for k, v in WEAVE_KEYS.items()}
+    if a['preset'] == 'km2_706':
+        P = _woven.km2_706()
+    elif a['preset'] in ('none', '', None):
+        P = _woven.WeaveParams()
+        P.warp_spacing = P.weft_spacing = 1e-3
+    else:
+        raise ValueError("preset = %r is invalid: allowed 'km2_706' or 'none'" % a['preset'])
+    pat = pattern(a['pattern'], a['twill_over'], a['twill_under'], a['satin_n'], a['satin_step'], a['basket_n'])
+    P.pattern = pat
+    P.nx, P.ny = int(a['nx']), int(a['ny'])
+    for fam in ('warp', 'weft'):
+        sp = a[fam + '_spacing'] if a[fam + '_spacing'] is not None else a['spacing']
+        if sp is not None:
+            setattr(P, fam + '_spacing', float(sp))
+        sec, mat = getattr(P, fam + '_section'), getattr(P, fam + '_material')
+        for key in ('width', 'thickness'):
+            if a[key] is not None:
+                setattr(sec, key, float(a[key]))
+        for key in ('E', 'rho', 'area', 'damping', 'failure_strain'):
+            if a[key] is not None:
+                setattr(mat, key, float(a[key]))
+        if a['linear_density'] is not None:
+            if not float(a['linear_density']) > 0:
+                raise ValueError('linear_density = %r is invalid: allowed (0, inf) kg/m' % a['linear_density'])
+            mat.area = float(a['linear_density']) / mat.rho
+        if a['tension_only'] is not None:
+            mat.tension_only = bool(a['tension_only'])
+        setattr(P, fam + '_section', sec)
+        setattr(P, fam + '_material', mat)
+        cr = a[fam + '_crimp'] if a[fam + '_crimp'] is not None else a['crimp']
+        if cr is not None:
+            setattr(P, fam + '_crimp', float(cr))
+    if a['cp_per_span'] is not None:
+        P.cp_per_span = int(a['cp_per_span'])
+    for key, conv in (('fine_radius', float), ('cp_coarse', int), ('fine_x', float), ('fine_y', float)):
+        if a[key] is not None:
+            setattr(P, key, conv(a[key]))
+    engine, s, warp, weft = _woven.build_weave(P)
+    summary = _summary_dict(s)
+    summary['cp_per_span'] = P.cp_per_span
+    summary['fine_radius'], summary['cp_coarse'] = P.fine_radius, P.cp_coarse
+    return Weave(engine, summary, list(warp), list(weft), a, pat)
