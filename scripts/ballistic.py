@@ -281,7 +281,7 @@ measured = {
                'fabric_elastic': E['elastic'], 'dissipated_impulses': E['contact'], 'damped': E['damped'],
                'released_breakage': E['released'], 'fabric_initial': fabric_initial},
     'max_body_penetration': stats['max_body_penetration'], 'max_yarn_penetration': stats['max_penetration'],
-    'settle_overlap': settle_left,
+    'settle_overlap': settle_left, 'yarn_thickness': thickness,
 }
 info = eng.yarn(w.warp_yarns[0])
 reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-reference.md (Nilakantan et al.)
@@ -292,7 +292,7 @@ reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-referen
 units = {'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
          'simulated_time': 's', 'dt': 's', 'fine_radius': 'm', 'wall_seconds': 's', 'cp_steps_per_second': '1/s', 'phase_seconds': 's',
          'energy': 'J', 'energy_balance_error': 'fraction of the projectile\'s initial kinetic energy',
-         'max_body_penetration': 'm', 'max_yarn_penetration': 'm', 'first_break_time': 's', 'mirror_seconds': 's'}
+         'max_body_penetration': 'm', 'max_yarn_penetration': 'm', 'yarn_thickness': 'm', 'first_break_time': 's', 'mirror_seconds': 's'}
 checks = {'energy_balance': {'value': balance, 'limit': p.energy_limit, 'passed': bool(abs(balance) <= p.energy_limit),
                              'what': '(final kinetic + elastic + dissipated + released - initial) / initial kinetic energy'},
           'momentum_direction': {'value': v_res, 'limit': p.V, 'passed': bool(v_res <= p.V * (1 + 1e-9)),

@@ -53,16 +53,21 @@ bool cpContactStatic(const Fabric& f, const std::vector<OBB>& bounds, Index a, I
   const BoxContact c = obbContact(bounds[a], bounds[b], 0, kLateralCos, false);  // the point comes from the axes
   if (!c.overlap) return false;
   out.cpA = a, out.cpB = b;
-  out.normal = c.normal;
   out.sectional = false;
   // The deepest place between two yarn pieces is where their axes come closest: measure there.
   const Vec3 &a0 = f.pos[f.elem0[a]], &a1 = f.pos[f.elem0[a] + 1], &b0 = f.pos[f.elem0[b]], &b1 = f.pos[f.elem0[b] + 1];
   const SegmentClosest sc = closestSegmentSegment(a0, a1, b0, b1);
+  const Vec3 onA = a0 + sc.s * (a1 - a0), onB = b0 + sc.t * (b1 - b0);
+  // The SAT orients its axis by the boxes' centres; two tilted pieces of crimped yarn can lie the
+  // other way round where their axes pass each other (A's centre above B's, A below B at the
+  // crossing). The side that counts is the local one: with the box's sign, the impulse would push
+  // B through A, and the depth below would be measured to the far sides of the sections.
+  out.normal = (onB - onA).dot(c.normal) < 0 ? Vec3(-c.normal) : c.normal;
   out.sA = sc.s, out.sB = sc.t;
-  out.point = 0.5 * (a0 + sc.s * (a1 - a0) + b0 + sc.t * (b1 - b0));
+  out.point = 0.5 * (onA + onB);
   Real la, lb;  // A's surface at p + la n, B's at p - lb n
-  const SectionLine ha = sectionSurfaceAlong(f, a, out.point, c.normal, rule, la);
-  const SectionLine hb = sectionSurfaceAlong(f, b, out.point, Vec3(-c.normal), rule, lb);
+  const SectionLine ha = sectionSurfaceAlong(f, a, out.point, out.normal, rule, la);
+  const SectionLine hb = sectionSurfaceAlong(f, b, out.point, Vec3(-out.normal), rule, lb);
   if (ha == SectionLine::Axial || hb == SectionLine::Axial) out.gap = 2 * margin - c.depth;  // end-on: boxes
   else if (ha == SectionLine::Beside || hb == SectionLine::Beside) out.gap = 2 * margin;      // box corners only
   else out.gap = std::max(-(la + lb), 2 * margin - c.depth), out.sectional = true;  // the boxes bound the bodies

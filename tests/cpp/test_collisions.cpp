@@ -3,6 +3,8 @@
 #include "bound/CPBound.hpp"
 #include "chain_util.hpp"
 #include "engine/FabricEngine.hpp"
+#include "geom/CPContact.hpp"
+#include "geom/SegmentDistance.hpp"
 #include "geom/SeparatingAxis.hpp"
 #include "law/ImpulseLaw.hpp"
 #include "weave/WeaveBuilder.hpp"
@@ -492,4 +494,40 @@ TEST(Collider, ContactCacheFollowsTheUncachedRun) {
   Real worst = 0;
   for (std::size_t i = 0; i < pos[0].size(); ++i) worst = std::max(worst, (pos[0][i] - pos[1][i]).norm());
   EXPECT_LT(worst, 0.01 * km2_706().warpSection.thickness);
+}
+
+// Two tilted pieces of crimped yarn, flattened to the MCD, whose boxes' axis points the other way
+// round from their axes at the crossing (the pair that showed it in a ballistic run: CPs 1 and 6 of
+// a 6.35 mm ply under a sphere, 49 steps in). The contact must take the local side: with the
+// boxes' sign the impulse pushed B through A and the depth was measured to the sections' far sides
+// (0.208 mm, against a yarn 0.11 mm thick).
+TEST(CPContact, NormalTakesTheSideWhereTheAxesPass) {
+  const Real r0 = std::sqrt(3.3424354891806017e-04 * 5.3478967830077872e-05);  // constant area at eps 0.6
+  Fabric f;
+  f.addYarn({Vec3(0.00040030723604226795, 0.00033533744367069497, -0.00019908385704081396),
+             Vec3(0.0011825889836095489, 0.0003054778496736031, -0.0003310878112283988)}, km2Material(), roundSection(r0));
+  f.addYarn({Vec3(0.0003735294117647059, -0.0003735294117647059, 5.5e-05),
+             Vec3(0.0002468126456741782, 0.00032130821415819586, -0.0002998536906452092)}, km2Material(), roundSection(r0));
+  const Vec3 dirs[4] = {Vec3(0.16903738991623307, 0.026736940203719736, 0.9852469217606569),
+                        Vec3(-0.16155708790666298, 0.02007478652859792, 0.9866591662235497),
+                        Vec3(-0.10291891776910196, 0.4261587933344468, 0.8987749324658343),
+                        Vec3(-0.03707497083560495, 0.1474725185289261, 0.9883710349945888)};
+  for (Index k = 0; k < 4; ++k) f.secFlat[k] = 0.6, f.secDir[k] = dirs[k];
+  Vec3Array t;
+  updateSectionFrames(f, t);
+  std::vector<OBB> boxes;
+  refitBounds(f, t, SectionRule::ConstantArea, 0, boxes);
+  const SegmentClosest sc = closestSegmentSegment(f.pos[0], f.pos[1], f.pos[2], f.pos[3]);
+  const Vec3 ab = (f.pos[2] + sc.t * (f.pos[3] - f.pos[2])) - (f.pos[0] + sc.s * (f.pos[1] - f.pos[0]));
+  const BoxContact box = obbContact(boxes[0], boxes[1], 0, kLateralCos, false);
+  ASSERT_TRUE(box.overlap);
+  ASSERT_LT(box.normal.dot(ab), 0);  // the scene is the one meant
+  CPContact c;
+  ASSERT_TRUE(cpContactStatic(f, boxes, 0, 1, 0, SectionRule::ConstantArea, c));
+  EXPECT_GT(c.normal.dot(ab), 0);
+  // The near sides: the two minor semi-axes (5.35e-5 m each) less the axes' distance along the
+  // normal, up to the sections' tilt against it (the ellipses are 6x wider than thick: allow 2x).
+  const Real nearSides = 2 * 5.35e-5 - std::abs(ab.dot(c.normal));
+  EXPECT_GT(-c.gap, 0);
+  EXPECT_LT(-c.gap, 2 * std::max(nearSides, Real(1e-5)));
 }
