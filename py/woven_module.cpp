@@ -410,6 +410,8 @@ BOOST_PYTHON_MODULE(_woven) {
       .def_readwrite("warp_material", &WeaveParams::warpMaterial).def_readwrite("weft_material", &WeaveParams::weftMaterial)
       .def_readwrite("warp_crimp", &WeaveParams::warpCrimp).def_readwrite("weft_crimp", &WeaveParams::weftCrimp)
       .def_readwrite("cp_per_span", &WeaveParams::cpPerSpan)
+      .def_readwrite("fine_radius", &WeaveParams::fineRadius).def_readwrite("cp_coarse", &WeaveParams::cpCoarse)
+      .def_readwrite("fine_x", &WeaveParams::fineX).def_readwrite("fine_y", &WeaveParams::fineY)
       .def("validate", &WeaveParams::validate);
   bp::def("penalty_dt_limit", &penaltyDtLimit, (bp::arg("m"), bp::arg("k")),
           "Largest stable time step [s] of a penalty contact of effective mass m [kg] > 0 and stiffness k [N/m] > 0: "
@@ -429,6 +431,8 @@ BOOST_PYTHON_MODULE(_woven) {
   bp::class_<WeaveSummary>("WeaveSummary", "Measured figures of a built weave (SI).")
       .def_readonly("warp_yarns", &WeaveSummary::warpYarns).def_readonly("weft_yarns", &WeaveSummary::weftYarns)
       .def_readonly("nodes", &WeaveSummary::nodes).def_readonly("elements", &WeaveSummary::elements)
+      .def_readonly("spans", &WeaveSummary::spans).def_readonly("fine_spans", &WeaveSummary::fineSpans)
+      .def_readonly("min_element_length", &WeaveSummary::minElementLength, "[m]")
       .def_readonly("warp_peirce", &WeaveSummary::warpPeirce).def_readonly("weft_peirce", &WeaveSummary::weftPeirce)
       .def_readonly("warp_crimp_built", &WeaveSummary::warpCrimpBuilt)
       .def_readonly("weft_crimp_built", &WeaveSummary::weftCrimpBuilt)

@@ -33,7 +33,15 @@ defaults.update({
     # 1 CP between crossings (0.75 mm): residual velocity within 2.7 % (200 m/s) and 12 % (120 m/s) of
     # 4 CPs, where 2 CPs were 6.9 % and 24 % off (docs/ballistic.md, resolution); 100 us in 22 s.
     'cp_per_span': (1, '', WEAVE_KEYS['cp_per_span'][2]),
+    # Adaptive resolution (docs/ballistic.md): cp_per_span CPs per span within fine_radius of the
+    # impact point, cp_coarse outside.
+    'fine_radius': (-1.0, 'm', 'adaptive resolution: spans within this distance of the impact point get cp_per_span CPs, '
+                    'the others cp_coarse; 0: the transverse wave\'s reach, U_E(V) t_end + the projectile\'s in-plane '
+                    'half-diagonal (box) or radius (sphere); < 0: uniform cp_per_span'),
+    'cp_coarse': (1, '', WEAVE_KEYS['cp_coarse'][2]),
 })
+for k in ('fine_x', 'fine_y'):  # the fine region is centred on the impact point, the ply's middle
+    del defaults[k]
 defaults.update(CONTACT_KEYS)
 defaults.update({
     'position_correction': (0.0, '', 'fraction of a locked overlap removed per step; 0 keeps the energy books closed'),
@@ -104,6 +112,10 @@ if p.vtk_every < -1:
     bad('vtk_every', '-1 (none), 0 (first and last) or a step count')
 if p.mirror_every < 0:
     bad('mirror_every', '0 (off) or a step count')
+if not (math.isfinite(p.fine_radius)):
+    bad('fine_radius', '[0, inf) m (0: from the transverse wave), or < 0 for uniform cp_per_span')
+if p.fine_radius >= 0 and not (1 <= p.cp_coarse <= p.cp_per_span):
+    bad('cp_coarse', '[1, cp_per_span = %d] CPs between crossings outside fine_radius' % p.cp_per_span)
 d = out_dir('ballistic', p)
 if p.model == 'yade':
     sys.exit(woven.yade_scenes.ballistic(p, d, WEAVE_KEYS, CONTACT_KEYS))
@@ -111,7 +123,10 @@ if p.model == 'yade':
 # --- the ply and the projectile (an ordinary YADE body) ---
 O.engines = []
 O.bodies.clear()
-ply = woven.ballistic.build_ply({k: p[k] for k in WEAVE_KEYS}, {k: p[k] for k in CONTACT_KEYS}, side=p.side,
+weave_args = {k: p[k] for k in WEAVE_KEYS if k in p}
+if p.fine_radius == 0:
+    weave_args['fine_radius'] = woven.ballistic.fine_radius_from_waves(weave_args, p.V, p.t_end, p.shape, p.size)
+ply = woven.ballistic.build_ply(weave_args, {k: p[k] for k in CONTACT_KEYS}, side=p.side,
                                 clamp=p.clamp, state=p.state,
                                 breakage=dict(strain=p.break_strain, filter_length=p.break_filter,
                                               weibull_m=p.weibull_m, seed=p.seed))
@@ -266,6 +281,7 @@ measured = {
     'broken_elements': eng.broken_elements, 'broken_yarns': eng.broken_yarns,
     'first_break_time': log[0]['time'] if log else None,
     'simulated_time': O.time, 'steps': O.iter, 'dt': O.dt, 'yarns': eng.n_yarns, 'cps': eng.n_elements,
+    'fine_radius': weave_args['fine_radius'], 'fine_spans': w.summary['fine_spans'], 'spans': w.summary['spans'],
     'wall_seconds': wall, 'cp_steps_per_second': cp_steps / wall if wall > 0 else None,
     'phase_seconds': phases, 'mirror_seconds': state['mirror_seconds'],
     'energy': {'projectile_initial': KE0, 'projectile_final': ke_p, 'fabric_kinetic': E['kinetic'],
@@ -281,7 +297,7 @@ reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-referen
                                                                             info['E'], info['rho']),
              'failure_strain': p.break_strain or info['failure_strain']}
 units = {'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
-         'simulated_time': 's', 'dt': 's', 'wall_seconds': 's', 'cp_steps_per_second': '1/s', 'phase_seconds': 's',
+         'simulated_time': 's', 'dt': 's', 'fine_radius': 'm', 'wall_seconds': 's', 'cp_steps_per_second': '1/s', 'phase_seconds': 's',
          'energy': 'J', 'energy_balance_error': 'fraction of the projectile\'s initial kinetic energy',
          'max_body_penetration': 'm', 'max_yarn_penetration': 'm', 'yarn_thickness': 'm', 'first_break_time': 's', 'mirror_seconds': 's'}
 checks = {'energy_balance': {'value': balance, 'limit': p.energy_limit, 'passed': bool(abs(balance) <= p.energy_limit),

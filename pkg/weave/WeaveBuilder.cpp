@@ -10,6 +10,13 @@ void WeaveParams::validate() const {
   require(nx >= 1 && nx <= 100000, "nx", nx, "[1, 100000]");
   require(ny >= 1 && ny <= 100000, "ny", ny, "[1, 100000]");
   require(cpPerSpan >= 1 && cpPerSpan <= 1000, "cp_per_span", cpPerSpan, "[1, 1000] CPs between crossings");
+  require(!std::isnan(fineRadius) && fineRadius < INFINITY, "fine_radius", fineRadius,
+          "[0, inf) m for adaptive resolution, < 0 for uniform cp_per_span");
+  if (fineRadius >= 0)
+    require(cpCoarse >= 1 && cpCoarse <= cpPerSpan, "cp_coarse", cpCoarse,
+            "[1, cp_per_span = " + std::to_string(cpPerSpan) + "] CPs between crossings outside fine_radius");
+  require(std::isnan(fineX) || std::isfinite(fineX), "fine_x", fineX, "finite m, or NaN for the fabric's middle");
+  require(std::isnan(fineY) || std::isfinite(fineY), "fine_y", fineY, "finite m, or NaN for the fabric's middle");
   warpSection.validate("warp_");
   weftSection.validate("weft_");
   warpMaterial.validate("warp_");
@@ -41,19 +48,24 @@ struct Profile {
   Real p = 0;            // crossing spacing along the yarn [m]
   Real theta = 0, R = 0; // Peirce weave angle [rad] and arc radius D/2 [m]
 
-  Real z(long q) const {
+  // Height at CP r of n in span k (from crossing k to k + 1; k may run one past either end).
+  Real z(long k, long r, long nk) const {
     const long N = static_cast<long>(zc.size());
-    const long k = floorDiv(q, n);
-    const long r = q - k * n;
     const Real z0 = zc[((k % N) + N) % N], z1 = zc[(((k + 1) % N) + N) % N];
     if (r == 0 || z0 == z1) return z0;
-    const Real u = p * Real(r) / Real(n), sg = z1 > z0 ? 1.0 : -1.0;
+    const Real u = p * Real(r) / Real(nk), sg = z1 > z0 ? 1.0 : -1.0;
     const Real ua = R * std::sin(theta);  // projected length of each arc
     if (u <= ua) return z0 + sg * (R - std::sqrt(R * R - u * u));
     if (u >= p - ua) return z1 - sg * (R - std::sqrt(R * R - (p - u) * (p - u)));
     return z0 + sg * (R * (1 - std::cos(theta)) + (u - ua) * std::tan(theta));
   }
-  Real s(long q) const { return p * (0.5 + Real(q) / Real(n)); }  // axial coordinate [m]
+  Real s(long k, long r, long nk) const { return p * (0.5 + Real(k * nk + r) / Real(nk)); }  // axial [m]
+  // Uniform sampling at n CPs per span, node q = k*n + r.
+  Real z(long q) const {
+    const long k = floorDiv(q, n);
+    return z(k, q - k * n, n);
+  }
+  Real s(long q) const { return p * (0.5 + Real(q) / Real(n)); }
   // Chain length over `crossings` spans starting at the first crossing [m].
   Real repeatLength(long crossings) const {
     Real L = 0;
@@ -100,29 +112,64 @@ Weave buildWeave(const WeaveParams& P) {
     for (int i = 0; i < NW; ++i) weft[j].zc.push_back(pat.warpOver(i % R, j % C) ? -0.5 * hf : 0.5 * hf);
   }
 
-  // Each yarn runs m CPs past its outer crossings (half a span when n is even).
+  // CPs in span k of a yarn (k = -1 and crossings - 1: the pieces past its outer crossings).
+  const bool adaptive = P.fineRadius >= 0;
+  const Real cx = std::isnan(P.fineX) ? 0.5 * NF * P.weftSpacing : P.fineX;
+  const Real cy = std::isnan(P.fineY) ? 0.5 * NW * P.warpSpacing : P.fineY;
+  Index spans = 0, fineSpans = 0;
+  // a, b: the span's ends along the yarn [m]; c: the yarn's other coordinate; (ca, cc): the fine
+  // centre in the same (along, across) frame. Fine when the span's nearest point is within fineRadius.
+  auto cpIn = [&](Real a, Real b, Real c, Real ca, Real cc) {
+    ++spans;
+    if (!adaptive || std::hypot(std::clamp(ca, a, b) - ca, c - cc) <= P.fineRadius) return ++fineSpans, n;
+    return P.cpCoarse;
+  };
+  // Each yarn runs (n + 1)/2 CPs of p/n past its outer crossings (half a span when n is even) at any
+  // resolution, so its length, mass and series stiffness do not depend on the end spans' CP count;
+  // a coarser end span takes its own CPs up to there and one element to the end node, no shorter than
+  // p/n (it would lower the critical time step) and shorter than p/n_k + p/n.
+  // Returns the nodes and, in `cross`, the node index (from the yarn's first) on each crossing.
   const long m = (n + 1) / 2;
-  auto nodesOf = [&](const Profile& pr, long crossings, auto place) {
+  auto nodesOf = [&](const Profile& pr, long crossings, Real c, Real ca, Real cc, std::vector<Index>& cross,
+                     auto place) {
     Vec3Array pts;
-    for (long q = -m; q <= (crossings - 1) * n + m; ++q) pts.push_back(place(pr.s(q), pr.z(q)));
+    cross.clear();
+    auto add = [&](long k, long r, long nk) { pts.push_back(place(pr.s(k, r, nk), pr.z(k, r, nk))); };
+    auto cpOf = [&](long k) { return long(cpIn(pr.p * (k + 0.5), pr.p * (k + 1.5), c, ca, cc)); };
+    const long n0 = cpOf(-1);
+    add(-1, n - m, n);
+    for (long r = 1; r < n0; ++r)
+      if (r * n >= (n - m + 1) * n0) add(-1, r, n0);
+    for (long k = 0; k < crossings - 1; ++k) {
+      const long nk = cpOf(k);
+      cross.push_back(static_cast<Index>(pts.size()));
+      for (long r = 0; r < nk; ++r) add(k, r, nk);
+    }
+    const long ne = cpOf(crossings - 1);
+    cross.push_back(static_cast<Index>(pts.size()));
+    for (long r = 0; r * n + ne <= m * ne; ++r) add(crossings - 1, r, ne);
+    add(crossings - 1, m, n);
     return pts;
   };
   Fabric& F = w.fabric;
+  std::vector<std::vector<Index>> crossW(NW), crossF(NF);  // crossing nodes of each warp / weft yarn
   for (int i = 0; i < NW; ++i) {
     const Real y = (i + 0.5) * P.warpSpacing;
-    w.warpYarns.push_back(F.addYarn(nodesOf(warp[i], NF, [&](Real s, Real z) { return Vec3(s, y, z); }),
+    w.warpYarns.push_back(F.addYarn(nodesOf(warp[i], NF, y, cx, cy, crossW[i], [&](Real s, Real z) { return Vec3(s, y, z); }),
                                     P.warpMaterial, P.warpSection, YarnFamily::Warp));
   }
   for (int j = 0; j < NF; ++j) {
     const Real x = (j + 0.5) * P.weftSpacing;
-    w.weftYarns.push_back(F.addYarn(nodesOf(weft[j], NW, [&](Real s, Real z) { return Vec3(x, s, z); }),
+    w.weftYarns.push_back(F.addYarn(nodesOf(weft[j], NW, x, cy, cx, crossF[j], [&](Real s, Real z) { return Vec3(x, s, z); }),
                                     P.weftMaterial, P.weftSection, YarnFamily::Weft));
   }
 
-  // Summary: crimp and areal density of one repeat, clearance at every crossing.
+  // Summary: crimp and areal density of one repeat (at cpPerSpan CPs per span), clearance at every crossing.
   S.warpYarns = NW, S.weftYarns = NF;
   S.nodes = F.nNodes(), S.elements = F.nElems();
   S.lengthX = NF * P.weftSpacing, S.lengthY = NW * P.warpSpacing;
+  S.spans = spans, S.fineSpans = fineSpans;
+  S.minElementLength = *std::min_element(F.restLength.begin(), F.restLength.end());
   const Real lw = P.warpMaterial.rho * P.warpMaterial.area, lf = P.weftMaterial.rho * P.weftMaterial.area;
   Real mass = 0, cw = 0, cf = 0;
   for (int i = 0; i < R; ++i) {
@@ -142,13 +189,16 @@ Weave buildWeave(const WeaveParams& P) {
     const Yarn& yw = F.yarns[w.warpYarns[i]];
     for (int j = 0; j < NF; ++j) {
       const Yarn& yf = F.yarns[w.weftYarns[j]];
-      const Index aw = yw.firstNode + static_cast<Index>(m + long(j) * n);  // node on the crossing
-      const Index af = yf.firstNode + static_cast<Index>(m + long(i) * n);
+      const Index aw = yw.firstNode + crossW[i][j], af = yf.firstNode + crossF[j][i];  // nodes on the crossing
       const bool over = pat.warpOver(i % R, j % C);
       S.minVerticalGap = std::min(S.minVerticalGap, over ? F.pos[aw].z() - F.pos[af].z() : F.pos[af].z() - F.pos[aw].z());
       // 3D distance of the two chains within one span either side of the crossing.
-      for (Index a = std::max(aw - n, yw.firstNode); a < std::min(aw + n, yw.firstNode + yw.nNodes - 1); ++a)
-        for (Index b = std::max(af - n, yf.firstNode); b < std::min(af + n, yf.firstNode + yf.nNodes - 1); ++b)
+      const Index a0 = j > 0 ? yw.firstNode + crossW[i][j - 1] : yw.firstNode;
+      const Index a1 = j + 1 < NF ? yw.firstNode + crossW[i][j + 1] : yw.firstNode + yw.nNodes - 1;
+      const Index b0 = i > 0 ? yf.firstNode + crossF[j][i - 1] : yf.firstNode;
+      const Index b1 = i + 1 < NW ? yf.firstNode + crossF[j][i + 1] : yf.firstNode + yf.nNodes - 1;
+      for (Index a = a0; a < a1; ++a)
+        for (Index b = b0; b < b1; ++b)
           S.minChainClearance = std::min(
               S.minChainClearance, closestSegmentSegment(F.pos[a], F.pos[a + 1], F.pos[b], F.pos[b + 1]).distance);
     }

@@ -16,11 +16,20 @@
 // centre-line gap there is exactly (t_warp + t_weft)/2; the straight CPs next to it cut inside the
 // arc, so the 3D distance of the two node chains is slightly smaller (reported as
 // minChainClearance; it tends to the gap as cpPerSpan grows).
+//
+// Adaptive resolution (fineRadius >= 0): a span whose nearest point lies within fineRadius of the
+// fine centre gets cpPerSpan CPs, every other span cpCoarse. A node stays on every crossing, so the
+// crossings keep their gap and the weave its over/under order; coarser than one CP per span is not
+// offered, because a chord over a skipped crossing runs through the crossing yarn's centre line. The
+// chains need nothing special at a seam: Fabric::addYarn lumps each node's mass from its actual
+// neighbouring elements (rho*A*l/2 each side) and gives each element K = E*A/l0, so a yarn's mass and
+// series stiffness are rho*A and E*A over its chain length at any mix of resolutions.
 #pragma once
 #include "core/Types.hpp"
 #include "fabric/Fabric.hpp"
 #include "weave/Pattern.hpp"
 #include "weave/Peirce.hpp"
+#include <cmath>
 
 namespace woven {
 
@@ -34,7 +43,10 @@ struct WeaveParams {
   YarnMaterial warpMaterial, weftMaterial;
   Real warpCrimp = -1;         ///< < 0: from Peirce with touching yarns; else given [-]
   Real weftCrimp = -1;
-  int cpPerSpan = 4;           ///< CPs between neighbouring crossings (>= 1)
+  int cpPerSpan = 4;           ///< CPs between neighbouring crossings (>= 1); inside fineRadius if adaptive
+  Real fineRadius = -1;        ///< [m] adaptive resolution within this distance of the fine centre; < 0: uniform
+  int cpCoarse = 1;            ///< CPs per span outside fineRadius, [1, cpPerSpan] (used if fineRadius >= 0)
+  Real fineX = NAN, fineY = NAN;  ///< fine centre [m] in the fabric's frame; NaN: the middle of the fabric
 
   void validate() const;       ///< throws ParameterError naming the parameter and range
 };
@@ -49,6 +61,8 @@ struct WeaveSummary {
   Real minVerticalGap = 0;     ///< min over crossings of the centre-line gap at the crossing [m]
   Real minChainClearance = 0;  ///< min over crossings of the 3D distance of the two node chains [m]
   Real lengthX = 0, lengthY = 0;  ///< nominal fabric size nx*cols*weftSpacing, ny*rows*warpSpacing [m]
+  Index spans = 0, fineSpans = 0;  ///< spans between crossings (and yarn ends), and those at cpPerSpan CPs
+  Real minElementLength = 0;   ///< shortest element [m]: it sets the critical time step
 };
 
 struct Weave {

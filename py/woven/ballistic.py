@@ -60,6 +60,18 @@ def build_ply(weave_args, contact_args, side=0.0508, clamp=4, state='', breakage
     return Ply(w, left)
 
 
+def fine_radius_from_waves(weave_args, V, t_end, shape, size):
+    """Radius [m] of the fine region for adaptive resolution: how far the transverse wave of Smith's
+    impact at V [m/s] travels in t_end [s] (lab-frame U_E of the weave's warp material,
+    physics-reference.md), plus the projectile's in-plane reach from its centre (a cube of edge `size`
+    [m] face on: size/sqrt(2); a sphere of diameter `size`: size/2)."""
+    from . import theory
+    probe = weave(**dict(weave_args, nx=1, ny=1, fine_radius=-1))
+    info = probe.engine.yarn(probe.warp_yarns[0])
+    U = theory.smith(V, info['E'], info['rho'])['U_E']
+    return U * t_end + (size / 2 ** 0.5 if shape == 'box' else 0.5 * size)
+
+
 def add_projectile(ply, shape='box', mass=1.1e-3, size=5.59e-3, V=200.0, standoff=5e-5):
     """A projectile over the ply's centre, `standoff` [m] above its top, moving at V [m/s] along -z:
     a cube of edge `size` [m], face on, or a sphere of diameter `size`, of `mass` [kg], appended to

@@ -32,7 +32,12 @@ WEAVE_KEYS = {
     'crimp': (None, '', 'crimp of both families; < 0 = Peirce with touching yarns'),
     'warp_crimp': (None, '', 'warp crimp; < 0 = Peirce'),
     'weft_crimp': (None, '', 'weft crimp; < 0 = Peirce'),
-    'cp_per_span': (None, '', 'CPs between neighbouring crossings (>= 1)'),
+    'cp_per_span': (None, '', 'CPs between neighbouring crossings (>= 1); inside fine_radius when adaptive'),
+    'fine_radius': (None, 'm', 'adaptive resolution: spans within this distance of (fine_x, fine_y) get cp_per_span '
+                    'CPs, the others cp_coarse; < 0: uniform cp_per_span'),
+    'cp_coarse': (None, '', 'CPs between crossings outside fine_radius, [1, cp_per_span]'),
+    'fine_x': (None, 'm', 'x of the fine centre (default: the middle of the fabric)'),
+    'fine_y': (None, 'm', 'y of the fine centre (default: the middle of the fabric)'),
 }
 
 
@@ -66,6 +71,7 @@ class Weave:
 def _summary_dict(s):
     return {
         'warp_yarns': s.warp_yarns, 'weft_yarns': s.weft_yarns, 'nodes': s.nodes, 'elements': s.elements,
+        'spans': s.spans, 'fine_spans': s.fine_spans, 'min_element_length': s.min_element_length,
         'areal_density': s.areal_density,
         'warp_crimp_peirce': s.warp_peirce.crimp, 'weft_crimp_peirce': s.weft_peirce.crimp,
         'warp_crimp_built': s.warp_crimp_built, 'weft_crimp_built': s.weft_crimp_built,
@@ -79,7 +85,7 @@ def _summary_dict(s):
 SUMMARY_UNITS = {
     'areal_density': 'kg/m^2', 'warp_crimp_height': 'm', 'weft_crimp_height': 'm', 'warp_weave_angle': 'rad',
     'weft_weave_angle': 'rad', 'required_gap': 'm', 'min_vertical_gap': 'm', 'min_chain_clearance': 'm',
-    'length_x': 'm', 'length_y': 'm',
+    'length_x': 'm', 'length_y': 'm', 'min_element_length': 'm',
 }
 
 
@@ -123,7 +129,11 @@ def weave(**kw):
             setattr(P, fam + '_crimp', float(cr))
     if a['cp_per_span'] is not None:
         P.cp_per_span = int(a['cp_per_span'])
+    for key, conv in (('fine_radius', float), ('cp_coarse', int), ('fine_x', float), ('fine_y', float)):
+        if a[key] is not None:
+            setattr(P, key, conv(a[key]))
     engine, s, warp, weft = _woven.build_weave(P)
     summary = _summary_dict(s)
     summary['cp_per_span'] = P.cp_per_span
+    summary['fine_radius'], summary['cp_coarse'] = P.fine_radius, P.cp_coarse
     return Weave(engine, summary, list(warp), list(weft), a, pat)

@@ -1,6 +1,7 @@
 // Weave builder (pkg/weave/WeaveBuilder.hpp): the KM2 preset against its datasheet and Peirce,
 // crossing clearance for every preset pattern and a random one, seamless replication, mass
-// bookkeeping, and the ParameterError raised for each kind of invalid input.
+// bookkeeping, adaptive resolution (mass, series stiffness and crossings against the uniform
+// model), and the ParameterError raised for each kind of invalid input.
 #include "core/Errors.hpp"
 #include "geom/SegmentDistance.hpp"
 #include "weave/WeaveBuilder.hpp"
@@ -214,6 +215,88 @@ TEST(Weave, ReplicationIsSeamless) {
     }
 }
 
+// Adaptive resolution: cpPerSpan CPs near the fine centre, cpCoarse elsewhere.
+TEST(Weave, AdaptiveKeepsMassStiffnessAndCrossings) {
+  for (const Pattern& pattern : {Pattern::plain(), Pattern::twill(2, 1)})
+    for (auto [fine, coarse] : {std::pair{4, 1}, std::pair{3, 2}, std::pair{5, 3}}) {
+      SCOPED_TRACE(std::to_string(pattern.rows()) + "x" + std::to_string(pattern.cols()) + " pattern, " +
+                   std::to_string(fine) + " / " + std::to_string(coarse) + " CPs");
+      WeaveParams P = woven::km2_706();
+      P.pattern = pattern, P.nx = P.ny = 6, P.cpPerSpan = fine;
+      const Weave uf = woven::buildWeave(P);
+      WeaveParams Pc = P;
+      Pc.cpPerSpan = coarse;
+      const Weave uc = woven::buildWeave(Pc);
+      P.fineRadius = 0.25 * uf.summary.lengthX, P.cpCoarse = coarse;
+      const Weave a = woven::buildWeave(P);
+      const Fabric &fa = a.fabric, &ff = uf.fabric;
+      // Some spans fine, some coarse; element count in between.
+      ASSERT_GT(a.summary.fineSpans, 0);
+      ASSERT_LT(a.summary.fineSpans, a.summary.spans);
+      EXPECT_GT(fa.nElems(), uc.fabric.nElems());
+      EXPECT_LT(fa.nElems(), ff.nElems());
+      // The shortest element is a fine one: the critical time step is the uniform fine model's.
+      EXPECT_NEAR(a.summary.minElementLength, uf.summary.minElementLength, 1e-15);
+
+      // Lumping at the seams: each node carries rho*A*l/2 of each neighbouring element, K = E*A/l0.
+      for (const auto& y : fa.yarns) {
+        const auto& m = fa.materials[y.material];
+        for (Index k = 0; k < y.nNodes; ++k) {
+          const Real l = (k > 0 ? fa.restLength[y.firstElem + k - 1] : 0) + (k + 1 < y.nNodes ? fa.restLength[y.firstElem + k] : 0);
+          ASSERT_LT(rel(fa.mass[y.firstNode + k], 0.5 * m.rho * m.area * l), 1e-12);
+        }
+        for (Index e = y.firstElem; e < y.firstElem + y.nElems; ++e)
+          ASSERT_LT(rel(fa.stiffness[e], m.E * m.area / fa.restLength[e]), 1e-12);
+      }
+      // Each yarn's mass and series stiffness against the uniform fine model's. They differ only by
+      // the chain length. Both chains are polylines inscribed in Peirce's centre line through the same
+      // crossing and end nodes, so on each span each lies between the chord and the arc: they differ
+      // by at most (arc - chord) per span, i.e. (Peirce's crimp - the 1-CP built crimp) per projected
+      // length (averaged over the pattern repeat; the two partial end spans are allowed 3 spans more).
+      Pc.cpPerSpan = 1;
+      const Weave u1 = woven::buildWeave(Pc);
+      const Real dCrimp = std::max(u1.summary.warpPeirce.crimp() - u1.summary.warpCrimpBuilt,
+                                   u1.summary.weftPeirce.crimp() - u1.summary.weftCrimpBuilt);
+      Real maxDiff = 0;
+      ASSERT_EQ(fa.nYarns(), ff.nYarns());
+      for (Index yi = 0; yi < fa.nYarns(); ++yi) {
+        const auto &ya = fa.yarns[yi], &yf = ff.yarns[yi];
+        Real ma = 0, mf = 0, ca = 0, cf = 0, proj = std::abs(fa.pos[ya.firstNode + ya.nNodes - 1].x() - fa.pos[ya.firstNode].x()) +
+                                              std::abs(fa.pos[ya.firstNode + ya.nNodes - 1].y() - fa.pos[ya.firstNode].y());
+        for (Index k = 0; k < ya.nNodes; ++k) ma += fa.mass[ya.firstNode + k];
+        for (Index k = 0; k < yf.nNodes; ++k) mf += ff.mass[yf.firstNode + k];
+        for (Index e = 0; e < ya.nElems; ++e) ca += 1 / fa.stiffness[ya.firstElem + e];
+        for (Index e = 0; e < yf.nElems; ++e) cf += 1 / ff.stiffness[yf.firstElem + e];
+        // Both ends of the yarn where the uniform model's are.
+        EXPECT_LT((fa.pos[ya.firstNode] - ff.pos[yf.firstNode]).norm(), 1e-15);
+        EXPECT_LT((fa.pos[ya.firstNode + ya.nNodes - 1] - ff.pos[yf.firstNode + yf.nNodes - 1]).norm(), 1e-15);
+        const Real length = ma / (fa.materials[ya.material].rho * fa.materials[ya.material].area);
+        const Real bound = dCrimp * (proj + 3 * P.weftSpacing) / length;
+        EXPECT_LE(std::abs(ma - mf) / mf, bound) << "yarn " << yi;
+        EXPECT_LE(std::abs(1 / ca - 1 / cf) * cf, bound) << "yarn " << yi;
+        maxDiff = std::max(maxDiff, std::abs(ma - mf) / mf);
+      }
+      EXPECT_LT(maxDiff, 1e-4);
+      EXPECT_GT(dCrimp, 0);  // the bound is not vacuous: the resolutions differ
+
+      // Crossings: a node on every one, at the required gap; chains clear as in the uniform test.
+      long crossings = 0;
+      const Real gap = gapFromNodes(a, P, crossings);
+      EXPECT_EQ(crossings, long(a.summary.warpYarns) * a.summary.weftYarns);
+      EXPECT_NEAR(gap, a.summary.requiredGap, 1e-15);
+      const Real tw = std::tan(a.summary.warpPeirce.theta), tf = std::tan(a.summary.weftPeirce.theta);
+      EXPECT_GE(minWarpWeftDistance(a), a.summary.requiredGap / std::sqrt(1 + tw * tw + tf * tf) - 1e-12);
+    }
+  // fineRadius < 0 is the uniform model, bit for bit; so is a radius that covers the whole fabric.
+  WeaveParams P = woven::km2_706();
+  P.nx = P.ny = 3;
+  const Weave u = woven::buildWeave(P);
+  P.fineRadius = 1.0;
+  const Weave all = woven::buildWeave(P);
+  ASSERT_EQ(u.fabric.nNodes(), all.fabric.nNodes());
+  for (Index i = 0; i < u.fabric.nNodes(); ++i) ASSERT_EQ(u.fabric.pos[i], all.fabric.pos[i]);
+}
+
 TEST(Weave, BadInputNamesTheParameter) {
   auto build = [](std::function<void(WeaveParams&)> change) {
     return parameterOf([&] {
@@ -225,6 +308,10 @@ TEST(Weave, BadInputNamesTheParameter) {
   EXPECT_EQ(build([](WeaveParams& P) { P.warpSection.width = 1.1 * P.warpSpacing; }), "warp_spacing");
   EXPECT_EQ(build([](WeaveParams& P) { P.weftSection.width = 1.1 * P.weftSpacing; }), "weft_spacing");
   EXPECT_EQ(build([](WeaveParams& P) { P.cpPerSpan = 0; }), "cp_per_span");
+  EXPECT_EQ(build([](WeaveParams& P) { P.fineRadius = NAN; }), "fine_radius");
+  EXPECT_EQ(build([](WeaveParams& P) { P.fineRadius = 1e-3, P.cpCoarse = 0; }), "cp_coarse");
+  EXPECT_EQ(build([](WeaveParams& P) { P.fineRadius = 1e-3, P.cpCoarse = P.cpPerSpan + 1; }), "cp_coarse");
+  EXPECT_EQ(build([](WeaveParams& P) { P.fineX = INFINITY; }), "fine_x");
   EXPECT_EQ(build([](WeaveParams& P) { P.nx = 0; }), "nx");
   EXPECT_EQ(build([](WeaveParams& P) { P.warpMaterial.E = -90e9; }), "warp_E");
   EXPECT_EQ(build([](WeaveParams& P) { P.weftMaterial.rho = -1440; }), "weft_rho");

@@ -151,3 +151,50 @@ def test_bench_ballistic_reports_phases(tmp_path):
     # the collision stage's clocks fit inside the measured wall time: the rest is what they leave
     assert all(v >= 0 for v in m['phase_seconds'].values())
     assert m['cp_steps_per_second'] > 0 and m['coupled_over_chain'] > 0 and 'goal' in log
+
+
+def test_adaptive_impact_balances_energy(tmp_path):
+    # 3 CPs per span within 4 mm of the impact point, 1 outside: the books close as at uniform
+    # resolution, the step is the fine elements' (dt_crit of the shortest), and the CP count lies
+    # between the uniform coarse and fine plies'.
+    import woven
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.012', 't_end=2e-5', 'vtk_every=-1', 'samples=50',
+                           'progress=0', 'cp_per_span=3', 'cp_coarse=1', 'fine_radius=4e-3')
+    assert rc == 0, log
+    m = s['measured']
+    assert s['status'] == 'ok'
+    assert abs(m['energy_balance_error']) < 0.01  # issue: closed within 1 % of the initial kinetic energy
+    assert m['absorbed_energy'] > 0
+    assert 0 < m['fine_spans'] < m['spans']
+    uniform = {n: woven.weave(nx=8, ny=8, cp_per_span=n) for n in (1, 3)}  # 16 x 16 yarns: 12 mm
+    assert uniform[1].summary['elements'] < m['cps'] < uniform[3].summary['elements']
+    assert m['dt'] == pytest.approx(0.7 * uniform[3].engine.dt_crit, rel=1e-12)
+
+
+def test_fine_radius_from_the_transverse_wave(tmp_path):
+    import woven
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.006', 't_end=2e-7', 'vtk_every=-1', 'progress=0',
+                           'cp_per_span=2', 'fine_radius=0')
+    assert rc == 0, log
+    U = woven.theory.smith(200.0, 90e9, 1440.0)['U_E']  # KM2: E 90 GPa, rho 1440 kg/m^3
+    assert s['measured']['fine_radius'] == pytest.approx(U * 2e-7 + 5.59e-3 / math.sqrt(2), rel=1e-12)
+
+
+@pytest.mark.parametrize('args,key', [(['fine_radius=nan'], 'fine_radius'),
+                                      (['fine_radius=1e-3', 'cp_coarse=0'], 'cp_coarse'),
+                                      (['fine_radius=1e-3', 'cp_per_span=2', 'cp_coarse=3'], 'cp_coarse')])
+def test_bad_adaptive_keys_name_the_key(tmp_path, args, key):
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', *args)
+    assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log
+
+
+def test_bench_adaptive_quick(tmp_path):
+    rc, log, s = run_scene('bench_adaptive.py', tmp_path, 'quick=1', 'cp_fine=2', 'fine_radius=3e-3')
+    assert rc == 0, log
+    m = s['measured']
+    assert m['side'] == 0.012
+    for run in ('uniform', 'adaptive'):
+        assert m[run]['outcome'] == 'perforated' and abs(m[run]['energy_balance_error']) < 0.01
+    assert m['adaptive']['cps'] < m['uniform']['cps'] and m['adaptive']['dt'] == m['uniform']['dt']
+    assert m['speedup'] == pytest.approx(m['uniform']['wall_seconds'] / m['adaptive']['wall_seconds'])
+    assert set(s['checks']) == {'speedup', 'residual_velocity', 'perforated'}
