@@ -118,7 +118,7 @@ if p.fine_radius >= 0 and not (1 <= p.cp_coarse <= p.cp_per_span):
     bad('cp_coarse', '[1, cp_per_span = %d] CPs between crossings outside fine_radius' % p.cp_per_span)
 d = out_dir('ballistic', p)
 if p.model == 'yade':
-    sys.exit(woven.yade_scenes.ballistic(p, d, WEAVE_KEYS, CONTACT_KEYS))
+    sys.exit(woven.yade_scenes.ballistic(p, d, [k for k in WEAVE_KEYS if k in p], CONTACT_KEYS))
 
 # --- the ply and the projectile (an ordinary YADE body) ---
 O.engines = []

@@ -382,7 +382,8 @@ if p.map:
         vals = [m.get('projectile_velocity_end'), m.get('energy_balance_error')]
         if any(v is None or not math.isfinite(v) for v in vals):
             return 'blow-up', 'non-finite result'
-        thick = m.get('yarn_thickness') or 0.11e-3
+        # the model's own yarn: woven's section thickness, the grid cylinder's diameter
+        thick = 2 * m['grid_radius'] if m.get('grid_radius') else (m.get('yarn_thickness') or 0.11e-3)
         if abs(m['energy_balance_error']) > 0.05:
             return 'energy', 'energy-balance error %.3g' % m['energy_balance_error']
         pen = max(m.get('max_yarn_penetration') or 0, m.get('max_body_penetration') or 0)

@@ -45,6 +45,9 @@ class StepHook {
   /// call [J] (EnergyBooks::spring). Kept out of the energy beforeDrift returns, so that an unstable
   /// spring shows in the books' total (the blow-up check) instead of being booked away as contact input.
   virtual Real springEnergy() const { return 0; }
+  /// Energy the springs held at the first step [J] (settled overlaps): it may turn into motion, so
+  /// the blow-up budget counts it with the initial energy.
+  virtual Real springEnergyAtStart() const { return 0; }
 };
 
 class ChainDynamics {
@@ -131,6 +134,7 @@ class ChainDynamics {
   long step_ = 0;
   Real time_ = 0;
   Real dtPrev_ = 0;
+  Real springAtStart_ = 0;  // StepHook::springEnergyAtStart of the last step [J]
   Real dtCrit_ = 0;     // criticalTimeStep of the fabric: the engine's dt limit and the blow-up budget
   Breakage breakage_;
   Vec3Array edge_;     // springForces: force of each chunk's first CP on the node the chunk before assigns

@@ -71,6 +71,7 @@ class CollisionStage : public StepHook {
   /// Spring energy of the penalty contacts and section springs now (plus the half kick of their
   /// forces, law/NormalForces), less its value at the first step [J].
   Real springEnergy() const override { return spring_ - spring0_; }
+  Real springEnergyAtStart() const override { return spring0_; }
   Real takeBodyWork() override {
     const Real w = bodyWork_;
     bodyWork_ = 0;
