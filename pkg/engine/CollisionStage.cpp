@@ -224,8 +224,11 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
     dirSum_.resize(f.pos.size(), Vec3::Zero());
     dirty_.assign(f.elem0.size(), 0);
     bool any = false;
-    // The capacities depend on the snapshot flatBefore_ and on nothing the pass changes: measured for
-    // every contact at once (threads), then the contacts flatten in order.
+    // The capacities are measured for every contact at once (threads), then the contacts flatten in
+    // order. A capacity reads the snapshot flatBefore_, except that flatteningDirection lets a node that
+    // is still circular (secFlat 0) turn freely: a node circular at the pass start and flattened by an
+    // earlier contact of this pass changes that, so those CPs are measured again in the loop (the
+    // serial order's result, the same bits at any thread count).
     const Index nc = static_cast<Index>(contacts_.size());
     capacity_.resize(2 * contacts_.size());
     parallelFor(nc, 256, threads(), [&](Index k) {
@@ -240,7 +243,14 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
       if (c.time > 0 || !(c.gap < -tiny)) continue;
       if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) continue;  // capacity 0: left to the impulses
       const Real need = -c.gap;
-      const Real capA = capacity_[2 * k], capB = capacity_[2 * k + 1];
+      const auto turnedThisPass = [&](Index e) {
+        const Index i = f.elem0[e];
+        return (flatBefore_[i] == 0 && f.secFlat[i] != 0) || (flatBefore_[i + 1] == 0 && f.secFlat[i + 1] != 0);
+      };
+      const Real capA = turnedThisPass(c.cpA) ? flatteningCapacity(f, tangent_, c.cpA, c.normal, params_, &flatBefore_)
+                                              : capacity_[2 * k];
+      const Real capB = turnedThisPass(c.cpB) ? flatteningCapacity(f, tangent_, c.cpB, c.normal, params_, &flatBefore_)
+                                              : capacity_[2 * k + 1];
       if (capA + capB <= tiny) continue;  // locked: left to the impulses
       Real dA = std::min(capA, 0.5 * need);
       const Real dB = std::min(capB, need - dA);
@@ -248,8 +258,8 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
       flattenCP(f, tangent_, c.cpA, c.normal, dA, params_, flatBefore_, dirSum_);
       flattenCP(f, tangent_, c.cpB, c.normal, dB, params_, flatBefore_, dirSum_);
       for (Index e : {c.cpA, c.cpB})
-        for (Index k = std::max(e - 1, 0); k <= std::min(e + 1, f.nElems() - 1); ++k)
-          if (f.elemYarn[k] == f.elemYarn[e]) dirty_[k] = 1;
+        for (Index q = std::max(e - 1, 0); q <= std::min(e + 1, f.nElems() - 1); ++q)
+          if (f.elemYarn[q] == f.elemYarn[e]) dirty_[q] = 1;
       ++stats.flattened;
       any = true;
     }
