@@ -2,10 +2,11 @@
 // 1 m/s), single thread, in CP-steps per second:
 //   bench_collide [sizes = 10,30,100] [seconds per measurement = 3]
 // For each size (yarns per family): the whole step with collisions (tree broad phase, default skin),
-// the same with sweep and prune, the tree with 2 narrow-phase threads, and the chain alone (no
+// the same with sweep and prune, the tree on 2 threads (woven::setThreads), and the chain alone (no
 // collisions) as the baseline, with the
 // collision stage's split (refit / broad / narrow / respond) and the ratios; then the two broad
 // phases head to head with skin = 0 (a broad phase every step).
+#include "core/Parallel.hpp"
 #include "engine/FabricEngine.hpp"
 #include "weave/WeaveBuilder.hpp"
 #include <chrono>
@@ -42,11 +43,11 @@ std::unique_ptr<FabricEngine> scene(int yarns) {
 
 Run measure(int yarns, bool collisions, BroadPhase broad, double seconds, Real skin = ContactParams().skin,
             int threads = 1) {
+  setThreads(threads);  // the whole step, chain included
   auto e = scene(yarns);
   if (collisions) {
     ContactParams p;
     p.skin = skin;
-    p.threads = threads;
     e->enableCollisions(p, broad);
     e->collisions()->settle(e->fabric());
   }
@@ -104,7 +105,7 @@ int main(int argc, char** argv) {
     std::printf("    collisions, SAP     %10.3g CP-steps/s  (%.3g x the chain alone)\n", sap.cpStepsPerSecond,
                 sap.cpStepsPerSecond / chain.cpStepsPerSecond);
     const Run tree2 = measure(n, true, BroadPhase::YarnTree, seconds, ContactParams().skin, 2);
-    std::printf("    collisions, tree, 2 narrow-phase threads %10.3g CP-steps/s  (%.3g x one thread)\n",
+    std::printf("    collisions, tree, 2 threads %10.3g CP-steps/s  (%.3g x one thread)\n",
                 tree2.cpStepsPerSecond, tree2.cpStepsPerSecond / tree.cpStepsPerSecond);
     printSplit("tree", tree);
     printSplit("SAP", sap);

@@ -4,6 +4,7 @@
 #include <boost/python.hpp>
 #include <boost/python/stl_iterator.hpp>
 #include "core/Errors.hpp"
+#include "core/Parallel.hpp"
 #include "engine/FabricEngine.hpp"
 #include "geom/SeparatingAxis.hpp"
 #include "weave/WeaveBuilder.hpp"
@@ -106,7 +107,7 @@ bp::dict energyDict(FabricEngine& e) {
   bp::dict d;
   d["kinetic"] = b.kinetic, d["elastic"] = b.elastic, d["damped"] = b.damped, d["work"] = b.work;
   d["initial"] = b.initial, d["contact"] = b.contact, d["contact_input"] = b.contactInput;
-  d["released"] = b.released, d["body_work"] = b.bodyWork;
+  d["released"] = b.released, d["body_work"] = b.bodyWork, d["spring"] = b.spring;
   d["balance_error"] = b.balanceError();
   return d;
 }
@@ -153,12 +154,15 @@ bool isKinematic(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.d
 void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real mcd, const std::string& rule, Real margin,
                         Real tolerance, int maxIterations, int flattenPasses, Real positionCorrection,
                         Real correctionSlop, Index selfExclude, const std::string& broad, Real skin, int threads,
-                        bool yarnContacts, Real cacheDistance) {
+                        bool yarnContacts, Real cacheDistance, const std::string& response, Real penaltyStiffness,
+                        Real penaltyDamping, const std::string& flattening, Real sectionStiffness) {
   ContactParams p;
   p.restitution = restitution, p.friction = friction, p.mcd = mcd, p.rule = sectionRuleByName(rule);
   p.margin = margin, p.tolerance = tolerance, p.maxIterations = maxIterations, p.flattenPasses = flattenPasses;
   p.positionCorrection = positionCorrection, p.correctionSlop = correctionSlop, p.selfExclude = selfExclude;
   p.skin = skin, p.threads = threads, p.yarnContacts = yarnContacts, p.cacheDistance = cacheDistance;
+  p.response = responseByName(response), p.penaltyStiffness = penaltyStiffness, p.penaltyDamping = penaltyDamping;
+  p.flattening = flatteningByName(flattening), p.sectionStiffness = sectionStiffness;
   e.enableCollisions(p, broadPhaseByName(broad));
 }
 CollisionStage& stageOf(FabricEngine& e) {
@@ -175,6 +179,7 @@ bp::dict collisionStats(FabricEngine& e) {
   d["unresolved"] = s.impulses.unresolved, d["penetration"] = s.penetration, d["max_penetration"] = s.maxPenetration;
   d["max_unresolved"] = s.maxUnresolved, d["max_residual"] = s.maxResidual;
   d["correction_energy"] = s.correctionEnergy;
+  d["force_rows"] = s.forces.rows, d["spring_energy"] = s.springEnergy, d["force_dissipated"] = s.forces.dissipated;
   d["seconds_refit"] = s.seconds[0], d["seconds_broad"] = s.seconds[1];
   d["seconds_narrow"] = s.seconds[2], d["seconds_respond"] = s.seconds[3];
   d["tree_rebuilt_nodes"] = stageOf(e).tree.stats.rebuiltNodes;
@@ -408,7 +413,20 @@ BOOST_PYTHON_MODULE(_woven) {
       .def_readwrite("fine_radius", &WeaveParams::fineRadius).def_readwrite("cp_coarse", &WeaveParams::cpCoarse)
       .def_readwrite("fine_x", &WeaveParams::fineX).def_readwrite("fine_y", &WeaveParams::fineY)
       .def("validate", &WeaveParams::validate);
+  bp::def("penalty_dt_limit", &penaltyDtLimit, (bp::arg("m"), bp::arg("k")),
+          "Largest stable time step [s] of a penalty contact of effective mass m [kg] > 0 and stiffness k [N/m] > 0: "
+          "2 sqrt(m / k).");
   bp::def("km2_706", &km2_706, "KM2 style 706 preset parameters.");
+  bp::def("set_threads", +[](int n) {
+            require(n >= 0 && n <= 1024, "threads", n, "[0, 1024] (0: follow OpenMP: OMP_NUM_THREADS, yade -j N)");
+            setThreads(n);
+          },
+          (bp::arg("n")),
+          "Threads of woven's loops in every engine: n >= 1 forces n, 0 follows OpenMP (OMP_NUM_THREADS, YADE's "
+          "-j N). Results are the same bits at any count (docs/design.md, Threads).");
+  bp::def("threads", +[]() { return threads(); }, "Threads woven's loops use now (in the calling thread).");
+  bp::def("openmp_threads", +[]() { return openmpThreads(); },
+          "OpenMP's count in the calling thread (omp_get_max_threads; 1 without OpenMP).");
 
   bp::class_<WeaveSummary>("WeaveSummary", "Measured figures of a built weave (SI).")
       .def_readonly("warp_yarns", &WeaveSummary::warpYarns).def_readonly("weft_yarns", &WeaveSummary::weftYarns)
@@ -483,13 +501,17 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("section_rule") = "constant_area", bp::arg("margin") = 1e-6, bp::arg("tolerance") = 1e-6,
             bp::arg("max_iterations") = 50, bp::arg("flatten_passes") = 4, bp::arg("position_correction") = 0.2,
             bp::arg("correction_slop") = 0.5e-6, bp::arg("self_exclude") = 1, bp::arg("broad_phase") = "tree",
-            bp::arg("skin") = 5e-6, bp::arg("threads") = 1, bp::arg("yarn_contacts") = true, bp::arg("contact_cache") = 1e-7),
+            bp::arg("skin") = 5e-6, bp::arg("threads") = 0, bp::arg("yarn_contacts") = true, bp::arg("contact_cache") = 1e-7,
+            bp::arg("response") = "impulse", bp::arg("penalty_stiffness") = 1e5, bp::arg("penalty_damping") = 0.0,
+            bp::arg("flattening") = "geometric", bp::arg("section_stiffness") = 1e4),
            "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction >= 0, mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
            "in [0, 1] per step, correction_slop [m], broad_phase 'tree', 'grid' or 'sap', skin [m] >= 0 (Verlet skin of "
-           "the broad phase), threads >= 1 (narrow phase; same contacts for any count), yarn_contacts (False: only "
+           "the broad phase), threads in [0, 64] (collision stage; 0: woven.threads(); same results for any count), yarn_contacts (False: only "
            "contacts with rigid bodies), contact_cache [m] >= 0 (a contact is carried while its nodes move "
-           "together to within this; 0: off). See woven.contact.")
+           "together to within this; 0: off), response 'impulse' or 'penalty', penalty_stiffness k_p [N/m] > 0, "
+           "penalty_damping zeta in [0, 1), flattening 'geometric', 'none' or 'springs', section_stiffness k_s [N/m] > 0 "
+           "(docs/collisions.md). See woven.contact.")
       .def("disable_collisions", +[](FabricEngine& e) { e.disableCollisions(); })
       .add_property("collisions_enabled", +[](FabricEngine& e) { return e.collisions() != nullptr; })
       .def("settle_sections", +[](FabricEngine& e, int passes) { return stageOf(e).settle(e.fabric(), passes); },

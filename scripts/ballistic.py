@@ -24,6 +24,8 @@ from woven.weave import WEAVE_KEYS
 from woven.contact import CONTACT_KEYS
 from yade import plot, utils
 import woven.ballistic
+import woven.yade_grid
+import woven.yade_scenes
 
 defaults = dict(WEAVE_KEYS)
 defaults.update({
@@ -73,8 +75,11 @@ defaults.update({
     'progress': (5.0, 's', 'wall time between progress lines (0: none)'),
     'energy_limit': (0.01, '', 'allowed energy-balance error / initial kinetic energy'),
     'out': ('', '', 'output folder (default out/ballistic)'),
+    'model': ('woven', '', "'woven', or 'yade': the same ply in YADE's grid elements (woven.yade_grid, docs/yade_grid.md)"),
 })
+defaults.update(woven.yade_grid.GRID_KEYS)
 p = read_params(defaults)
+woven.yade_scenes.check_model(p)
 
 # --- input checks: every bad value names its key and the allowed range, before anything is built ---
 def bad(key, allowed):
@@ -112,6 +117,8 @@ if not (math.isfinite(p.fine_radius)):
 if p.fine_radius >= 0 and not (1 <= p.cp_coarse <= p.cp_per_span):
     bad('cp_coarse', '[1, cp_per_span = %d] CPs between crossings outside fine_radius' % p.cp_per_span)
 d = out_dir('ballistic', p)
+if p.model == 'yade':
+    sys.exit(woven.yade_scenes.ballistic(p, d, [k for k in WEAVE_KEYS if k in p], CONTACT_KEYS))
 
 # --- the ply and the projectile (an ordinary YADE body) ---
 O.engines = []

@@ -27,7 +27,10 @@ p = read_params({
     'strain_tol': (0.01, '', 'allowed relative strain error at the finest resolution'),
     'speed_tol': (0.03, '', 'allowed relative U_E error at the finest resolution'),
     'out': ('', '', 'output folder (default out/smith)'),
+    'model': ('woven', '', "'woven', or 'yade': the same yarn as YADE grid nodes and connections (woven.yade_grid)"),
 })
+if p.model not in ('woven', 'yade'):
+    raise ValueError("model = %r is invalid: allowed 'woven' or 'yade'" % p.model)
 for k, lo in (('V', 0), ('E', 0), ('rho', 0), ('length', 0), ('area', 0)):
     if not p[k] > lo:
         raise ValueError('%s = %r is invalid: allowed (0, inf) %s' % (k, p[k], p.units[k]))
@@ -61,13 +64,15 @@ def run(n):
     L = p.length
     f.add_yarn([Vector3(-L / 2 + L * i / n, 0, 0) for i in range(n + 1)], mat, sec)
     eng = woven.FabricEngine(f)
+    mid = n // 2
+    t_end = p.duration * (L / 2) / c
+    if p.model == 'yade':
+        return run_grid(eng, n, mid, t_end)
     eng.fix(0)
     eng.fix(n)
-    mid = n // 2
     eng.prescribe_velocity(mid, Vector3(0, p.V, 0))
     O.engines = []
     woven.attach(eng, set_dt=True, safety=p.safety)
-    t_end = p.duration * (L / 2) / c
     steps = int(math.ceil(t_end / O.dt))
     X0 = woven.positions(eng).copy()
     O.run(steps // 2, True)
@@ -89,6 +94,61 @@ def run(n):
     return {'elements': n, 'l0': L / n, 'dt': O.dt, 'steps': steps, 'time': t2, 'strain': strain,
             'U_E': UE, 'strain_error': strain / th['strain'] - 1, 'U_E_error': UE / th['U_E'] - 1,
             'energy_balance_error': eng.energy()['balance_error'] / max(eng.energy()['work'], 1e-300)}, X, e
+
+
+def run_grid(eng, n, mid, t_end):
+    """The same yarn as YADE grid nodes on woven's nodes (no crossings: offset 0) with bonds of
+    K = E A / l0 and no bending, driven by YADE's NewtonIntegrator: the struck node's velocity is
+    held by blocked DOFs, the ends are fixed. O.dt = safety * sqrt(m/K), the chain's critical step."""
+    from woven import yade_grid
+    O.engines = yade_grid.engines()
+    # no crossings: the radius only has to keep non-neighbour connections of the yarn apart (< l0/2)
+    g = yade_grid.build(eng, [0], radius=0.25 * p.length / n, offset=0, crossings=[])
+    ids = g.nodes[0]
+    g.fix_ends()
+    b = O.bodies[ids[mid]]
+    b.state.blockedDOFs = 'xyzXYZ'
+    b.state.vel = Vector3(0, p.V, 0)
+    O.dt = g.stable_dt(p.safety, extra_contacts=0)
+    steps = int(math.ceil(t_end / O.dt))
+    # energy books: the driver's work on the struck node, W = sum of -F_bonds . V dt (F_bonds the
+    # force the two bonds put on it, read after NewtonIntegrator, before the next ForceResetter),
+    # against the chain's kinetic energy gained and the bonds' elastic energy 1/2 kn un^2
+    work = [0.0]
+
+    def driver_work():
+        work[0] -= O.forces.f(ids[mid])[1] * p.V * O.dt
+
+    import __main__
+    __main__.grid_driver_work = driver_work
+    O.engines = O.engines + [PyRunner(command='grid_driver_work()', iterPeriod=1)]
+
+    def energy():
+        kin = sum(0.5 * O.bodies[i].state.mass * O.bodies[i].state.vel.squaredNorm() for i in ids)
+        el = sum(0.5 * it.phys.kn * (it.geom.penetrationDepth - it.phys.unp) ** 2 for it in O.interactions
+                 if isinstance(it.geom, GridNodeGeom6D))
+        return kin + el
+
+    E0 = energy()
+
+    def pos():
+        return np.array([list(O.bodies[i].state.pos) for i in ids])
+
+    X0 = pos()
+    O.run(steps // 2, True)
+    t1, k1 = O.time, kink(pos(), O.time)
+    O.run(steps - steps // 2, True)
+    t2, X = O.time, pos()
+    k2 = kink(X, t2)
+    UE = (k2 - k1) / (t2 - t1)
+    e = np.linalg.norm(np.diff(X, axis=0), axis=1) / g.length0[0] - 1
+    xk_mat, xl = th['U_L'] * t2, c * t2
+    xm = 0.5 * (X0[:-1, 0] + X0[1:, 0])
+    lo, hi = xk_mat + 0.2 * (xl - xk_mat), xk_mat + 0.8 * (xl - xk_mat)
+    strain = float(np.mean(e[(xm > lo) & (xm < hi)]))
+    return {'elements': n, 'l0': p.length / n, 'dt': O.dt, 'steps': steps, 'time': t2, 'strain': strain,
+            'U_E': UE, 'strain_error': strain / th['strain'] - 1, 'U_E_error': UE / th['U_E'] - 1,
+            'energy_balance_error': (energy() - E0 - work[0]) / max(work[0], 1e-300)}, X, e
 
 
 rows = []

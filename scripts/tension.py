@@ -18,6 +18,8 @@ from woven.params import read_params
 from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS
 from woven.contact import CONTACT_KEYS
+import woven.yade_grid
+import woven.yade_scenes
 
 defaults = dict(WEAVE_KEYS)
 defaults.update({
@@ -37,8 +39,11 @@ defaults.update({
     'initial_fit': (0.25, '', 'the initial stiffness is fitted over the first this fraction of the strain range'),
     'penetration_limit': (0.01, '', 'allowed final overlap as a fraction of the yarn thickness'),
     'out': ('', '', 'output folder (default out/tension)'),
+    'model': ('woven', '', "'woven', or 'yade': the same weave in YADE's grid elements (woven.yade_grid, docs/yade_grid.md)"),
 })
+defaults.update(woven.yade_grid.GRID_KEYS)
 p = read_params(defaults)
+woven.yade_scenes.check_model(p)
 if p.mode not in ('uniaxial', 'biaxial'):
     raise ValueError("mode = %r is invalid: allowed 'uniaxial' or 'biaxial'" % p.mode)
 for k, lo, hi in (('velocity', 0, 100), ('ramp', 0, 1), ('safety', 0, 1),
@@ -52,6 +57,8 @@ if p.samples < 10:
 d = out_dir('tension', p)
 weave_args = {k: p[k] for k in WEAVE_KEYS}
 contact_args = {k: p[k] for k in CONTACT_KEYS}
+if p.model == 'yade':
+    sys.exit(woven.yade_scenes.tension(p, d, weave_args))
 
 
 def build():

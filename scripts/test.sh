@@ -4,6 +4,9 @@
 # Run scripts/setup.sh first (the README's test command does both).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# ctest runs several test programs at once, each with OpenMP's threads: spinning idle threads on a
+# full machine slowed a test 6x (docs/design.md, Threads); the tests check bits, not speed.
+export OMP_WAIT_POLICY=passive
 echo "== C++ tests (Release)"
 ctest --test-dir build --output-on-failure -j"$(nproc)"
 echo "== C++ tests (AddressSanitizer + UndefinedBehaviorSanitizer)"

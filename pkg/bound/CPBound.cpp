@@ -1,21 +1,22 @@
 #include "bound/CPBound.hpp"
+#include "core/Parallel.hpp"
 #include <algorithm>
 #include <cmath>
 
 namespace woven {
 
+// Each node on its own (threads: Parallel.hpp).
 void updateSectionFrames(Fabric& f, Vec3Array& tangent) {
   tangent.resize(f.pos.size());
-  for (const Yarn& y : f.yarns) {
+  parallelFor(f.nNodes(), kParallelGrain, threads(), [&](Index k) {
+    const Yarn& y = f.yarns[f.nodeYarn[k]];
     const Index n0 = y.firstNode, n1 = y.firstNode + y.nNodes - 1;
-    for (Index k = n0; k <= n1; ++k) {
-      const Vec3 t = (f.pos[std::min(k + 1, n1)] - f.pos[std::max(k - 1, n0)]).normalized();
-      tangent[k] = t;
-      Vec3 d = f.secDir[k] - f.secDir[k].dot(t) * t;  // turn the section with the yarn
-      const Real len = d.norm();
-      f.secDir[k] = len > 1e-6 ? Vec3(d / len) : t.unitOrthogonal();
-    }
-  }
+    const Vec3 t = (f.pos[std::min(k + 1, n1)] - f.pos[std::max(k - 1, n0)]).normalized();
+    tangent[k] = t;
+    Vec3 d = f.secDir[k] - f.secDir[k].dot(t) * t;  // turn the section with the yarn
+    const Real len = d.norm();
+    f.secDir[k] = len > 1e-6 ? Vec3(d / len) : t.unitOrthogonal();
+  });
 }
 
 OBB cpBound(const Fabric& f, const Vec3Array& tangent, Index e, SectionRule rule, Real margin) {
@@ -48,7 +49,7 @@ OBB cpBound(const Fabric& f, const Vec3Array& tangent, Index e, SectionRule rule
 
 void refitBounds(const Fabric& f, const Vec3Array& tangent, SectionRule rule, Real margin, std::vector<OBB>& boxes) {
   boxes.resize(f.elem0.size());
-  for (Index e = 0; e < f.nElems(); ++e) boxes[e] = cpBound(f, tangent, e, rule, margin);
+  parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) { boxes[e] = cpBound(f, tangent, e, rule, margin); });
 }
 
 }  // namespace woven

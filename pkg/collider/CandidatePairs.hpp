@@ -2,6 +2,7 @@
 // Both colliders (the OBB tree and the sweep-and-prune reference) apply the same final test to the
 // same boxes, so on the same input they return the same sorted list.
 #pragma once
+#include "core/Parallel.hpp"
 #include "bound/OBB.hpp"
 #include "fabric/Fabric.hpp"
 #include <cmath>
@@ -45,8 +46,11 @@ struct PairFilter {
 /// Broad-phase box of each CP: its bound grown by `grow[e]` [m] on every side (the distance its
 /// nodes can travel within the step), so no pair that meets during the step is missed.
 inline void growBoxes(const std::vector<OBB>& bounds, const std::vector<Real>& grow, std::vector<OBB>& out) {
-  out = bounds;
-  for (std::size_t e = 0; e < out.size(); ++e) out[e].extent.array() += grow[e];
+  out.resize(bounds.size());
+  parallelFor(static_cast<Index>(out.size()), kParallelGrain, threads(), [&](Index e) {
+    out[e] = bounds[e];
+    out[e].extent.array() += grow[e];
+  });
 }
 
 }  // namespace woven

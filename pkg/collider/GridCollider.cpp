@@ -61,31 +61,45 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
       slotItem_[at] = i, slotCell_[at] = k;
     }
 
-  // Each CP with the later CPs of its cells.
-  for (Index i = 0; i < n; ++i) {
-    mine_.clear();
-    for (Index k = cellBegin_[i]; k < cellBegin_[i + 1]; ++k) {
-      const Cell& c = cellOf_[k];
-      const std::uint64_t s = slotOf(c.x, c.y, c.z, mask);
-      for (std::uint32_t at = slotCount_[s]; at < slotCount_[s + 1]; ++at) {
-        const Index j = slotItem_[at];
-        if (j <= i) continue;
-        const Cell& cj = cellOf_[slotCell_[at]];
-        if (cj.x != c.x || cj.y != c.y || cj.z != c.z) continue;  // another cell in the same slot
-        if ((hi_[i].array() < lo_[j].array()).any() || (hi_[j].array() < lo_[i].array()).any()) continue;
-        // The pair belongs to the cell of its AABB intersection's lowest corner: once only.
-        const Vec3 corner = lo_[i].cwiseMax(lo_[j]);
-        if (static_cast<std::int64_t>(std::floor(corner.x() * ih)) != c.x ||
-            static_cast<std::int64_t>(std::floor(corner.y() * ih)) != c.y ||
-            static_cast<std::int64_t>(std::floor(corner.z() * ih)) != c.z)
-          continue;
-        if (filter.excluded(f, i, j)) continue;
-        ++overlapTests;
-        if (obbOverlap(boxes[i], boxes[j])) mine_.push_back(j);
+  // Each CP with the later CPs of its cells: fixed chunks of CPs (threads), each listing its pairs in
+  // CP order, joined in chunk order (the same list at any thread count).
+  constexpr Index kChunk = 1024;
+  const Index chunks = chunkCount(n, kChunk);
+  chunkPairs_.resize(chunks);
+  chunkTests_.assign(chunks, 0);
+  parallelForDynamic(chunks, 2, threads(), [&](Index t) {
+    std::vector<CPPair>& out = chunkPairs_[t];
+    out.clear();
+    std::vector<Index> mine;
+    for (Index i = t * kChunk, end = std::min(n, i + kChunk); i < end; ++i) {
+      mine.clear();
+      for (Index k = cellBegin_[i]; k < cellBegin_[i + 1]; ++k) {
+        const Cell& c = cellOf_[k];
+        const std::uint64_t s = slotOf(c.x, c.y, c.z, mask);
+        for (std::uint32_t at = slotCount_[s]; at < slotCount_[s + 1]; ++at) {
+          const Index j = slotItem_[at];
+          if (j <= i) continue;
+          const Cell& cj = cellOf_[slotCell_[at]];
+          if (cj.x != c.x || cj.y != c.y || cj.z != c.z) continue;  // another cell in the same slot
+          if ((hi_[i].array() < lo_[j].array()).any() || (hi_[j].array() < lo_[i].array()).any()) continue;
+          // The pair belongs to the cell of its AABB intersection's lowest corner: once only.
+          const Vec3 corner = lo_[i].cwiseMax(lo_[j]);
+          if (static_cast<std::int64_t>(std::floor(corner.x() * ih)) != c.x ||
+              static_cast<std::int64_t>(std::floor(corner.y() * ih)) != c.y ||
+              static_cast<std::int64_t>(std::floor(corner.z() * ih)) != c.z)
+            continue;
+          if (filter.excluded(f, i, j)) continue;
+          ++chunkTests_[t];
+          if (obbOverlap(boxes[i], boxes[j])) mine.push_back(j);
+        }
       }
+      std::sort(mine.begin(), mine.end());
+      for (Index j : mine) out.push_back({i, j});
     }
-    std::sort(mine_.begin(), mine_.end());
-    for (Index j : mine_) pairs.push_back({i, j});
+  });
+  for (Index t = 0; t < chunks; ++t) {
+    pairs.insert(pairs.end(), chunkPairs_[t].begin(), chunkPairs_[t].end());
+    overlapTests += chunkTests_[t];
   }
 }
 

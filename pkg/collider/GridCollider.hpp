@@ -31,7 +31,8 @@ class GridCollider {
   std::vector<std::uint32_t> slotCount_;   // hash table: entries per slot, then their start
   std::vector<std::uint32_t> fill_;        // next free entry of each slot while scattering
   std::vector<Index> slotItem_, slotCell_;  // per entry: the CP and its cell (index into cellOf_)
-  std::vector<Index> mine_;                // partners of one CP before sorting
+  std::vector<std::vector<CPPair>> chunkPairs_;  // pairs of each fixed chunk of CPs
+  std::vector<long> chunkTests_;                 // OBB tests of each chunk
 };
 
 }  // namespace woven

@@ -73,7 +73,8 @@ void YarnTreeCollider::build(const Fabric& f) {
   }
 }
 
-void YarnTreeCollider::refitRange(const std::vector<OBB>& boxes, Index first, Index last) {
+long YarnTreeCollider::refitRange(const std::vector<OBB>& boxes, Index first, Index last) {
+  long rebuilt = 0;
   for (Index k = last - 1; k >= first; --k) {  // children before parents
     Node& n = nodes_[k];
     if (n.leaf()) {
@@ -88,25 +89,28 @@ void YarnTreeCollider::refitRange(const std::vector<OBB>& boxes, Index first, In
     chordAxes(n.box, l, r);  // first fit, or the quality degraded: rebuild this node's axes
     fitOnAxes(n.box, l, r);
     n.refVolume = std::max(volume(n.box), 1e-300);
-    ++stats.rebuiltNodes;
+    ++rebuilt;
   }
+  return rebuilt;
 }
 
-void YarnTreeCollider::descend(const Fabric& f, Index p, Index q, const PairFilter& filter, std::vector<CPPair>& pairs) {
-  stack_.clear();
-  stack_.emplace_back(p, q);
-  while (!stack_.empty()) {
-    auto [i, j] = stack_.back();
-    stack_.pop_back();
+long YarnTreeCollider::descend(const Fabric& f, Index p, Index q, const PairFilter& filter, std::vector<CPPair>& pairs,
+                               std::vector<std::pair<Index, Index>>& stack) const {
+  long tests = 0;
+  stack.clear();
+  stack.emplace_back(p, q);
+  while (!stack.empty()) {
+    auto [i, j] = stack.back();
+    stack.pop_back();
     const Node &a = nodes_[i], &b = nodes_[j];
     if (i == j) {  // a subtree against itself: its two halves against each other and themselves
       if (a.leaf()) continue;
-      stack_.emplace_back(a.left, a.right);
-      stack_.emplace_back(a.right, a.right);
-      stack_.emplace_back(a.left, a.left);
+      stack.emplace_back(a.left, a.right);
+      stack.emplace_back(a.right, a.right);
+      stack.emplace_back(a.left, a.left);
       continue;
     }
-    ++stats.overlapTests;
+    ++tests;
     if (a.leaf() && b.leaf()) {  // the same test, in the same argument order, as SweepAndPrune
       const bool aFirst = a.lo < b.lo;
       const Index x = aFirst ? a.lo : b.lo, y = aFirst ? b.lo : a.lo;
@@ -116,13 +120,14 @@ void YarnTreeCollider::descend(const Fabric& f, Index p, Index q, const PairFilt
     }
     if (!obbOverlap(a.box, b.box)) continue;
     if (b.leaf() || (!a.leaf() && a.hi - a.lo >= b.hi - b.lo)) {
-      stack_.emplace_back(a.right, j);
-      stack_.emplace_back(a.left, j);
+      stack.emplace_back(a.right, j);
+      stack.emplace_back(a.left, j);
     } else {
-      stack_.emplace_back(i, b.right);
-      stack_.emplace_back(i, b.left);
+      stack.emplace_back(i, b.right);
+      stack.emplace_back(i, b.left);
     }
   }
+  return tests;
 }
 
 void YarnTreeCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const PairFilter& filter,
@@ -132,17 +137,20 @@ void YarnTreeCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, c
     same = layout_[2 * y] == f.yarns[y].firstElem && layout_[2 * y + 1] == f.yarns[y].nElems;
   if (!same) build(f);
   // Each yarn's nodes are contiguous (built yarn after yarn). With `dirty`, only the flagged yarns'
-  // boxes changed since the last call, so only their trees are refitted.
-  for (std::size_t y = 0; y < root_.size(); ++y) {
-    if (root_[y] < 0 || (dirty && same && !(*dirty)[y])) continue;
+  // boxes changed since the last call, so only their trees are refitted; each tree on its own (threads).
+  const Index nY = static_cast<Index>(root_.size());
+  perYarn_.assign(nY, 0);
+  parallelForDynamic(nY, 2, threads(), [&](Index y) {
+    if (root_[y] < 0 || (dirty && same && !(*dirty)[y])) return;
     Index end = static_cast<Index>(nodes_.size());
-    for (std::size_t z = y + 1; z < root_.size(); ++z)
+    for (Index z = y + 1; z < nY; ++z)
       if (root_[z] >= 0) {
         end = root_[z];
         break;
       }
-    refitRange(boxes, root_[y], end);
-  }
+    perYarn_[y] = refitRange(boxes, root_[y], end);
+  });
+  for (long r : perYarn_) stats.rebuiltNodes += r;
   pairs.clear();
 
   // Across yarns: sort the roots' world-axis-aligned extents along x and sweep (few yarns).
@@ -162,16 +170,30 @@ void YarnTreeCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, c
   }
   std::sort(spans.begin(), spans.end(),
             [](const Span& a, const Span& b) { return a.lo[0] < b.lo[0] || (a.lo[0] == b.lo[0] && a.yarn < b.yarn); });
-  for (std::size_t s = 0; s < spans.size(); ++s) {
+  // The descents of each span (threads) into their own list; the lists joined and sorted: the same
+  // pairs in the same order at any thread count.
+  const Index nS = static_cast<Index>(spans.size());
+  spanPairs_.resize(nS);
+  perYarn_.assign(nS, 0);
+  parallelForDynamic(nS, 2, threads(), [&](Index s) {
+    std::vector<CPPair>& out = spanPairs_[s];
+    out.clear();
+    std::vector<std::pair<Index, Index>> stack;
+    long tests = 0;
     const bool dirtyS = !dirty || (*dirty)[spans[s].yarn];
-    if (dirtyS) descend(f, root_[spans[s].yarn], root_[spans[s].yarn], filter, pairs);  // self contact of the yarn
-    for (std::size_t t = s + 1; t < spans.size() && spans[t].lo[0] <= spans[s].hi[0]; ++t) {
+    if (dirtyS) tests += descend(f, root_[spans[s].yarn], root_[spans[s].yarn], filter, out, stack);  // self contact of the yarn
+    for (Index t = s + 1; t < nS && spans[t].lo[0] <= spans[s].hi[0]; ++t) {
       if (!dirtyS && !(*dirty)[spans[t].yarn]) continue;
       if (spans[t].lo[1] > spans[s].hi[1] || spans[s].lo[1] > spans[t].hi[1] || spans[t].lo[2] > spans[s].hi[2] ||
           spans[s].lo[2] > spans[t].hi[2])
         continue;
-      descend(f, root_[spans[s].yarn], root_[spans[t].yarn], filter, pairs);
+      tests += descend(f, root_[spans[s].yarn], root_[spans[t].yarn], filter, out, stack);
     }
+    perYarn_[s] = tests;
+  });
+  for (Index s = 0; s < nS; ++s) {
+    pairs.insert(pairs.end(), spanPairs_[s].begin(), spanPairs_[s].end());
+    stats.overlapTests += perYarn_[s];
   }
   std::sort(pairs.begin(), pairs.end());
 }

@@ -40,13 +40,17 @@ class YarnTreeCollider {
   };
   Index buildRange(Index lo, Index hi);
   void build(const Fabric& f);
-  void refitRange(const std::vector<OBB>& boxes, Index first, Index last);  // nodes [first, last), bottom up
-  void descend(const Fabric& f, Index p, Index q, const PairFilter& filter, std::vector<CPPair>& pairs);
+  // nodes [first, last), bottom up; returns the nodes whose axes were rebuilt
+  long refitRange(const std::vector<OBB>& boxes, Index first, Index last);
+  // pairs of the subtrees p and q into pairs (stack: scratch); returns the box tests made
+  long descend(const Fabric& f, Index p, Index q, const PairFilter& filter, std::vector<CPPair>& pairs,
+               std::vector<std::pair<Index, Index>>& stack) const;
 
   std::vector<Node> nodes_;  // pre-order: children after their parent
   std::vector<Index> root_;  // per yarn (-1 for a yarn with no CP)
   std::vector<Index> layout_;  // first element and count of each yarn, to detect a changed fabric
-  std::vector<std::pair<Index, Index>> stack_;
+  std::vector<std::vector<CPPair>> spanPairs_;  // pairs found from each root span
+  std::vector<long> perYarn_;                   // rebuilt nodes per yarn, then box tests per span
 };
 
 }  // namespace woven

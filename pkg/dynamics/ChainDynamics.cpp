@@ -1,5 +1,6 @@
 #include "dynamics/ChainDynamics.hpp"
 #include "core/Errors.hpp"
+#include "core/Parallel.hpp"
 #include <algorithm>
 #include <cmath>
 
@@ -100,6 +101,7 @@ void ChainDynamics::start() {
   books_.contact = 0;
   books_.contactInput = 0;
   books_.released = 0;
+  books_.spring = 0;
   books_.bodyWork = 0;
   Real ke = 0;
   for (Index i = 0; i < f_.nNodes(); ++i) ke += 0.5 * f_.mass[i] * f_.vel[i].squaredNorm();
@@ -114,11 +116,33 @@ void ChainDynamics::refreshForces() {
   computeForces(0.0);  // dt = 0: the damped and work books take nothing
 }
 
+namespace {
+// Fixed chunks of the node and element loops (Parallel.hpp): their sums are the same bits at any
+// thread count. Large enough that a chunk costs far more than its share of a parallel region.
+constexpr Index kNodeChunk = 4096, kElemChunk = 2048;
+struct KickSums {  // 2 x kinetic energy of step n, and sum m v_{n+1/2} of free nodes
+  Real ke2 = 0;
+  Vec3 p = Vec3::Zero();
+  KickSums& operator+=(const KickSums& o) {
+    ke2 += o.ke2, p += o.p;
+    return *this;
+  }
+};
+struct SpringSums {  // per chunk of CPs
+  Real elastic = 0, dissipated = 0;
+  SpringSums& operator+=(const SpringSums& o) {
+    elastic += o.elastic, dissipated += o.dissipated;
+    return *this;
+  }
+};
+}  // namespace
+
 // Kick and drift of every node (velocity Verlet with the two half-kicks of consecutive steps fused,
 // see the header). Kinematic nodes have invMass 0 and had their velocity set before. Returns the
 // kinetic energy of step n; momentum collects sum m v_{n+1/2} of free nodes for the body-force work.
 // (A separate pass: fusing it into the CP loop below was measured slower, 39 vs 62 M node-steps/s
-// in cache, because each CP then waits on the drift of its second node.)
+// in cache, because each CP then waits on the drift of its second node.) Nodes are independent;
+// the sums are taken per fixed chunk of nodes.
 template <bool Gravity, bool Drift>
 Real ChainDynamics::kickDrift(Real dt, Vec3& momentum) {
   const Real hPrev = 0.5 * dtPrev_, h = 0.5 * dt;
@@ -128,22 +152,23 @@ Real ChainDynamics::kickDrift(Real dt, Vec3& momentum) {
   const Vec3* __restrict F = f_.force.data();
   const Real* __restrict im = f_.invMass.data();
   const Real* __restrict m = f_.mass.data();
-  const Index n = f_.nNodes();
-  Real ke2 = 0;
-  Vec3 p = Vec3::Zero();
-  for (Index i = 0; i < n; ++i) {
-    Vec3 a = F[i] * im[i];
-    if (Gravity) a += (im[i] > 0 ? 1.0 : 0.0) * g;
-    const Vec3 vn = v[i] + hPrev * a;
-    ke2 += m[i] * vn.squaredNorm();
-    v[i] = vn + h * a;
-    if (Drift) {
-      if (Gravity) p += (im[i] > 0 ? m[i] : 0.0) * v[i];
-      x[i] += dt * v[i];
+  const KickSums s = chunkedSum(f_.nNodes(), kNodeChunk, threads(), KickSums(), [&](Index i0, Index i1) {
+    KickSums c;
+    for (Index i = i0; i < i1; ++i) {
+      Vec3 a = F[i] * im[i];
+      if (Gravity) a += (im[i] > 0 ? 1.0 : 0.0) * g;
+      const Vec3 vn = v[i] + hPrev * a;
+      c.ke2 += m[i] * vn.squaredNorm();
+      v[i] = vn + h * a;
+      if (Drift) {
+        if (Gravity) c.p += (im[i] > 0 ? m[i] : 0.0) * v[i];
+        x[i] += dt * v[i];
+      }
     }
-  }
-  momentum = p;
-  return 0.5 * ke2;
+    return c;
+  });
+  momentum = s.p;
+  return 0.5 * s.ke2;
 }
 
 // The drift alone, after a StepHook changed the velocities.
@@ -153,12 +178,14 @@ void ChainDynamics::drift(Real dt, Vec3& momentum) {
   const Vec3* __restrict v = f_.vel.data();
   const Real* __restrict im = f_.invMass.data();
   const Real* __restrict m = f_.mass.data();
-  Vec3 p = Vec3::Zero();
-  for (Index i = 0, n = f_.nNodes(); i < n; ++i) {
-    if (Gravity) p += (im[i] > 0 ? m[i] : 0.0) * v[i];
-    x[i] += dt * v[i];
-  }
-  momentum = p;
+  momentum = chunkedSum(f_.nNodes(), kNodeChunk, threads(), Vec3(Vec3::Zero()), [&](Index i0, Index i1) {
+    Vec3 p = Vec3::Zero();
+    for (Index i = i0; i < i1; ++i) {
+      if (Gravity) p += (im[i] > 0 ? m[i] : 0.0) * v[i];
+      x[i] += dt * v[i];
+    }
+    return p;
+  });
 }
 
 // The axial spring + dashpot of every CP (paper Eq. 3): T = K(l - l0) + c*ldot along
@@ -167,6 +194,9 @@ void ChainDynamics::drift(Real dt, Vec3& momentum) {
 // force is assigned by the element before it and completed by the element after it (no zeroing
 // pass). Also the elastic energy and the dashpot dissipation, and with StoreElementState the strain
 // and tension of each CP (left out of the step: the two stores cost ~14 % of its throughput).
+// Threads take fixed chunks of CPs. A chunk's first CP does not add to its first node, which the
+// chunk before assigns, but leaves its force in edge_; those are added after the loop, so each node
+// sees the same two operations in the same order as in one pass: the same bits at any thread count.
 template <bool StoreElementState>
 void ChainDynamics::springForces(Real dt) {
   Vec3* __restrict F = f_.force.data();
@@ -177,34 +207,48 @@ void ChainDynamics::springForces(Real dt) {
   const Real* __restrict C = f_.damping.data();
   Real* __restrict strain = f_.strain.data();
   Real* __restrict tension = f_.tension.data();
-  Real elastic = 0, dissipated = 0;
-  for (const Yarn& y : f_.yarns) {
-    const bool tensionOnly = f_.materials[y.material].tensionOnly;
-    const Index e0 = y.firstElem, e1 = y.firstElem + y.nElems;
-    F[y.firstNode].setZero();
-    for (Index e = e0; e < e1; ++e) {
-      const Index a = y.firstNode + (e - e0);
-      const Vec3 d = x[a + 1] - x[a];
-      const Real l = d.norm();
-      const Real il = 1.0 / l;  // one division, not three
-      const Vec3 n = d * il;
-      const Real ldot = n.dot(v[a + 1] - v[a]);
-      const Real stretch = l - l0[e];
-      Real Te = K[e] * stretch;
-      Real T = Te + C[e] * ldot;
-      if (tensionOnly) {
-        const bool taut = stretch > 0;
-        Te = taut ? Te : 0.0;
-        T = taut ? std::max(T, 0.0) : 0.0;
+  const Index nE = f_.nElems();
+  edge_.assign(static_cast<std::size_t>(chunkCount(nE, kElemChunk)), Vec3::Zero());
+  const SpringSums sums = chunkedSum(nE, kElemChunk, threads(), SpringSums(), [&](Index c0, Index c1) {
+    SpringSums s;
+    Index e = c0;
+    while (e < c1) {  // the yarns this chunk of CPs runs through
+      const Yarn& y = f_.yarns[f_.elemYarn[e]];
+      const bool tensionOnly = f_.materials[y.material].tensionOnly;
+      const Index end = std::min(c1, y.firstElem + y.nElems);
+      if (e == y.firstElem) F[y.firstNode].setZero();
+      const bool inherited = e != y.firstElem;  // the chunk before assigned this CP's first node
+      for (const Index e0 = e; e < end; ++e) {
+        const Index a = y.firstNode + (e - y.firstElem);
+        const Vec3 d = x[a + 1] - x[a];
+        const Real l = d.norm();
+        const Real il = 1.0 / l;  // one division, not three
+        const Vec3 n = d * il;
+        const Real ldot = n.dot(v[a + 1] - v[a]);
+        const Real stretch = l - l0[e];
+        Real Te = K[e] * stretch;
+        Real T = Te + C[e] * ldot;
+        if (tensionOnly) {
+          const bool taut = stretch > 0;
+          Te = taut ? Te : 0.0;
+          T = taut ? std::max(T, 0.0) : 0.0;
+        }
+        s.elastic += Te * stretch;        // = K*stretch^2 where the spring acts
+        s.dissipated += (T - Te) * ldot;  // a non-finite l reaches both sums, even through a clamp
+        if (StoreElementState) strain[e] = stretch / l0[e], tension[e] = T;
+        const Vec3 Fa = T * n;
+        if (inherited && e == e0) edge_[c0 / kElemChunk] = Fa;
+        else F[a] += Fa;
+        F[a + 1] = -Fa;
       }
-      elastic += Te * stretch;        // = K*stretch^2 where the spring acts
-      dissipated += (T - Te) * ldot;  // a non-finite l reaches both sums, even through a clamp
-      if (StoreElementState) strain[e] = stretch / l0[e], tension[e] = T;
-      const Vec3 Fa = T * n;
-      F[a] += Fa;
-      F[a + 1] = -Fa;
     }
+    return s;
+  });
+  for (Index k = 1; k < static_cast<Index>(edge_.size()); ++k) {
+    const Index e = k * kElemChunk;
+    if (e != f_.yarns[f_.elemYarn[e]].firstElem) F[f_.elem0[e]] += edge_[k];
   }
+  const Real elastic = sums.elastic, dissipated = sums.dissipated;
   if (!std::isfinite(elastic + dissipated)) failNonFinite();
   books_.elastic = 0.5 * elastic;
   books_.damped += dissipated * dt;  // dashpot power (T-Te)*ldot = c*ldot^2 >= 0 leaves the motion
@@ -251,6 +295,8 @@ void ChainDynamics::step(Real dt, StepHook* hook) {
   } else {
     ke = gravity ? kickDrift<true, false>(dt, p) : kickDrift<false, false>(dt, p);
     if (std::isfinite(ke)) bookContact(hook->beforeDrift(f_, dt));
+    books_.spring = hook->springEnergy();
+    springAtStart_ = hook->springEnergyAtStart();
     gravity ? drift<true>(dt, p) : drift<false>(dt, p);
     if (std::isfinite(ke)) bookContact(hook->afterDrift(f_, dt));
     // What the bodies gave is work on the fabric, not contact dissipation: move it across.
@@ -282,7 +328,7 @@ void ChainDynamics::step(Real dt, StepHook* hook) {
   const Real s = dt / dtCrit_;
   const Real stableRange = s < 1 ? 1 / (1 - s * s) : 1.0;
   const Real budget =
-      limits.blowupFactor * stableRange * (books_.initial + std::abs(books_.work) + books_.contactInput) +
+      limits.blowupFactor * stableRange * (books_.initial + springAtStart_ + std::abs(books_.work) + books_.contactInput) +
       limits.energyFloor;
   if (books_.total() > budget) {
     Index worst = 0;
@@ -292,9 +338,9 @@ void ChainDynamics::step(Real dt, StepHook* hook) {
       if (k > worstKe) worstKe = k, worst = i;
     }
     throw InstabilityError(step_, worst, -1,
-                           "energy blow-up: kinetic+elastic+damped+contact = " +
+                           "energy blow-up: kinetic+elastic+damped+contact+spring = " +
                                fmt(books_.total()) + " J exceeds " +
-                               fmt(limits.blowupFactor) + " x (initial + |work| + contact input) / (1 - (dt/dt_crit)^2) = " + fmt(budget) +
+                               fmt(limits.blowupFactor) + " x (initial + springs at start + |work| + contact input) / (1 - (dt/dt_crit)^2) = " + fmt(budget) +
                                " J (time step too large, or a load out of bounds)");
   }
   if (limits.checkpointInterval > 0 && step_ % limits.checkpointInterval == 0) checkpoint();

@@ -1,6 +1,6 @@
 // Energy books of the chain dynamics. All in joules. "work" is what the loads (kinematic nodes,
 // point forces, body force) and the rigid bodies' impulses put in; the balance
-// kinetic + elastic + damped + contact + released = initial + work
+// kinetic + elastic + damped + contact + spring + released = initial + work
 // holds to the integrator's O(dt^2) accuracy (plus the positional corrections of residual overlaps,
 // which no book takes: docs/collisions.md).
 #pragma once
@@ -16,11 +16,14 @@ struct EnergyBooks {
   Real bodyWork = 0;    ///< of which by the rigid bodies (YADE bodies coupled to the fabric) [J]
   Real contact = 0;     ///< energy taken out by the contact stage since the start [J] (impulses take, corrections give)
   Real contactInput = 0;  ///< energy the contact stage put in, summed step by step [J] (>= 0)
+  /// Energy held now in the contact springs of a force-based response (penalty contacts 1/2 k_p delta^2,
+  /// section springs 1/2 k_s (r0 eps)^2: docs/collisions.md), less what they held at the first step [J].
+  Real spring = 0;
   Real released = 0;    ///< elastic energy of broken elements, released at their break [J]
   Real initial = 0;     ///< kinetic + elastic at step 0 [J]
 
-  Real total() const { return kinetic + elastic + damped + contact + released; }
-  /// (kinetic + elastic + damped + contact + released) - (initial + work) [J]
+  Real total() const { return kinetic + elastic + damped + contact + spring + released; }
+  /// (kinetic + elastic + damped + contact + spring + released) - (initial + work) [J]
   Real balanceError() const { return total() - initial - work; }
 };
 

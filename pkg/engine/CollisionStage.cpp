@@ -1,13 +1,13 @@
 #include "engine/CollisionStage.hpp"
 #include "bound/CPBound.hpp"
 #include "core/Errors.hpp"
+#include "core/Parallel.hpp"
 #include "geom/SeparatingAxis.hpp"
 #include "law/SectionFlattening.hpp"
 #include <algorithm>
 #include <chrono>
 #include <iterator>
 #include <cmath>
-#include <thread>
 
 namespace woven {
 
@@ -41,6 +41,8 @@ void CollisionStage::setParams(const ContactParams& p) {
   params_ = p;
   pairsValid_ = false;
   invalidateCache();  // contacts measured with other parameters
+  springStarted_ = false;
+  restFlat_.clear();
   filter_.selfExclude = p.selfExclude;
   filter_.yarnExclude.clear();  // configured again for the fabric at the next refit
 }
@@ -51,10 +53,10 @@ void CollisionStage::refit(Fabric& f, Real dt) {
   refitBounds(f, tangent_, params_.rule, params_.margin, bounds_);
   // Each CP's broad-phase box grows by the farthest its nodes can drift in the step.
   grow_.resize(bounds_.size());
-  for (Index e = 0; e < f.nElems(); ++e) {
+  parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
     const Index i = f.elem0[e];
     grow_[e] = dt * std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm()));
-  }
+  });
   growBoxes(bounds_, grow_, grown_);
 }
 
@@ -76,16 +78,14 @@ bool inside(const OBB& a, const OBB& b) {
 void CollisionStage::broad(const Fabric& f) {
   const bool partial = broadPhase == BroadPhase::YarnTree;
   if (pairsValid_ && skinBoxes_.size() == grown_.size()) {
+    // The containment test of every CP (threads), then the yarns that hold one outside (in order).
+    outside_.resize(grown_.size());
+    parallelFor(static_cast<Index>(grown_.size()), kParallelGrain, threads(),
+                [&](Index e) { outside_[e] = !inside(grown_[e], skinBoxes_[e]); });
     dirtyYarn_.assign(f.yarns.size(), 0);
     bool keep = true;
-    for (std::size_t e = 0; e < grown_.size(); ++e) {
-      if (partial && dirtyYarn_[f.elemYarn[e]]) continue;
-      if (!inside(grown_[e], skinBoxes_[e])) {
-        keep = false;
-        if (!partial) break;
-        dirtyYarn_[f.elemYarn[e]] = 1;
-      }
-    }
+    for (std::size_t e = 0; e < grown_.size(); ++e)
+      if (outside_[e]) keep = false, dirtyYarn_[f.elemYarn[e]] = 1;
     if (keep) return;
     if (partial) {
       for (std::size_t e = 0; e < grown_.size(); ++e)
@@ -154,23 +154,25 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
   if (sectionStamp_.size() != f.elem0.size()) sectionStamp_.assign(f.elem0.size(), 0);
   if (cachePairs_.size() != pairs_.size() || pairsChanged_) remapCache();
   pairsChanged_ = false;
-  const bool caching = params_.cacheDistance > 0;
-  // Contiguous slices of the sorted pairs, one per thread, concatenated in order: the same contacts
-  // in the same order for any thread count (each pair's cache entry is its own).
-  const std::size_t n = pairs_.size();
-  const int threads = n >= 4096 ? params_.threads : 1;  // below that a thread costs more than it saves
-  slices_.resize(threads);
-  std::vector<long> reused(threads, 0);
-  auto work = [&](int t) {
+  // Section springs reset every section each step (restoreSections): no contact outlives its sections.
+  const bool caching = params_.cacheDistance > 0 && params_.flattening != Flattening::Springs;
+  // Fixed chunks of the sorted pairs (threads take them in any order), concatenated in chunk order:
+  // the same contacts in the same order for any thread count (each pair's cache entry is its own).
+  constexpr Index kPairChunk = 512;
+  const Index n = static_cast<Index>(pairs_.size());
+  const Index chunks = chunkCount(n, kPairChunk);
+  slices_.resize(chunks);
+  reused_.assign(chunks, 0);
+  parallelForDynamic(chunks, 4, threads(), [&](Index t) {
     std::vector<CPContact>& out = slices_[t];
     out.clear();
     CPContact c;
-    for (std::size_t k = n * t / threads; k < n * (t + 1) / threads; ++k) {
+    for (Index k = t * kPairChunk, end = std::min(n, k + kPairChunk); k < end; ++k) {
       const CPPair& pr = pairs_[k];
       if (!f.alive[pr.a] || !f.alive[pr.b]) continue;  // broken since the broad phase
       if (caching && reuse(f, k, c)) {
         out.push_back(c);
-        ++reused[t];
+        ++reused_[t];
         continue;
       }
       PairCache& pc = cache_[k];
@@ -191,16 +193,12 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
       if (dt > 0 && cpContactMoving(f, bounds_, pr.a, pr.b, dt, params_.margin, c))
         out.push_back(c);
     }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
-  work(0);
-  for (std::thread& th : pool) th.join();
+  });
   contacts_.clear();
   stats.cached = 0;
-  for (int t = 0; t < threads; ++t) {
+  for (Index t = 0; t < chunks; ++t) {
     contacts_.insert(contacts_.end(), slices_[t].begin(), slices_[t].end());
-    stats.cached += reused[t];
+    stats.cached += reused_[t];
   }
 }
 
@@ -226,12 +224,23 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
     dirSum_.resize(f.pos.size(), Vec3::Zero());
     dirty_.assign(f.elem0.size(), 0);
     bool any = false;
-    for (const CPContact& c : contacts_) {
+    // The capacities depend on the snapshot flatBefore_ and on nothing the pass changes: measured for
+    // every contact at once (threads), then the contacts flatten in order.
+    const Index nc = static_cast<Index>(contacts_.size());
+    capacity_.resize(2 * contacts_.size());
+    parallelFor(nc, 256, threads(), [&](Index k) {
+      const CPContact& c = contacts_[k];
+      if (c.time > 0 || !(c.gap < -tiny)) return;
+      if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) return;  // the loop below skips it
+      capacity_[2 * k] = flatteningCapacity(f, tangent_, c.cpA, c.normal, params_, &flatBefore_);
+      capacity_[2 * k + 1] = flatteningCapacity(f, tangent_, c.cpB, c.normal, params_, &flatBefore_);
+    });
+    for (Index k = 0; k < nc; ++k) {
+      const CPContact& c = contacts_[k];
       if (c.time > 0 || !(c.gap < -tiny)) continue;
       if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) continue;  // capacity 0: left to the impulses
       const Real need = -c.gap;
-      const Real capA = flatteningCapacity(f, tangent_, c.cpA, c.normal, params_, &flatBefore_);
-      const Real capB = flatteningCapacity(f, tangent_, c.cpB, c.normal, params_, &flatBefore_);
+      const Real capA = capacity_[2 * k], capB = capacity_[2 * k + 1];
       if (capA + capB <= tiny) continue;  // locked: left to the impulses
       Real dA = std::min(capA, 0.5 * need);
       const Real dB = std::min(capB, need - dA);
@@ -247,24 +256,85 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
     if (!any) break;
     turnSections(f, tangent_, flatBefore_, dirSum_);
     if (sectionStamp_.size() != f.elem0.size()) sectionStamp_.assign(f.elem0.size(), 0);
-    for (Index e = 0; e < f.nElems(); ++e)
+    parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
       if (dirty_[e]) {
         bounds_[e] = cpBound(f, tangent_, e, params_.rule, params_.margin);
         sectionStamp_[e] = cacheClock_;  // the cached contacts of this CP no longer hold
       }
-    for (CPContact& c : contacts_) {
-      if (c.time > 0 || !(dirty_[c.cpA] || dirty_[c.cpB])) continue;
+    });
+    parallelFor(nc, 256, threads(), [&](Index k) {  // each contact on its own
+      CPContact& c = contacts_[k];
+      if (c.time > 0 || !(dirty_[c.cpA] || dirty_[c.cpB])) return;
       CPContact again;
       if (cpContactStatic(f, bounds_, c.cpA, c.cpB, params_.margin, params_.rule, again)) c = again;
       else c.gap = 2 * params_.margin;  // apart now: at least this far
-    }
+    });
   }
   return passes;
 }
 
+// Flattening Springs: the sections are elastic (paper Eq. 7: a spring between the axis node and the
+// ellipse node). Each step they start from their shape at the first step (a built weave's settled
+// sections) and flatten again, geometrically up to the MCD, as far as this step's overlaps ask;
+// the deformation beyond the rest shape then pushes back (addSectionSprings). So the section's
+// flattening is a function of the positions and its spring energy is a potential.
+void CollisionStage::restoreSections(Fabric& f) {
+  if (restFlat_.size() != f.secFlat.size()) restFlat_ = f.secFlat, restDir_ = f.secDir;
+  f.secFlat = restFlat_;
+  f.secDir = restDir_;
+}
+
+// The paper's Eq. 7, F_i = k_i (u_i^2 - u_i^1), is a spring between node i's axis position u^1 and
+// its ellipse node u^2; here |u^2 - u^1| - r0 is the flattening r0 eps (beyond the rest shape) and
+// k_i = k_s, so node k pushes back with k_s r0 eps_k along its flattening direction. The force
+// reaches the yarns through the contacts pressing the node: node k's force is shared among its
+// contacts in touch in proportion to its weight |w| in each (the impulse weights), and a contact
+// gets half the sum over its four nodes (the A side and the B side carry the same force, springs in
+// series). One contact in the middle of two CPs overlapping by delta: each node flattens by
+// delta/2, the contact force is 2 x k_s delta/2 = k_s delta, the derivative of the energy
+// 4 x 1/2 k_s (delta/2)^2. The flattening cosine (dir.n, 1 for a square crossing) is neglected.
+// Returns the energy 1/2 k_s (r0 eps)^2 of the flattened sections [J].
+Real CollisionStage::addSectionSprings(const Fabric& f) {
+  const Real ks = params_.sectionStiffness, touch = 2 * params_.margin + 1e-12;
+  nodeWeight_.assign(f.secFlat.size(), 0);
+  auto nodesOf = [&](const CPContact& c, Index* node, Real* w) {
+    node[0] = f.elem0[c.cpA], node[1] = node[0] + 1, node[2] = f.elem0[c.cpB], node[3] = node[2] + 1;
+    w[0] = 1 - c.sA, w[1] = c.sA, w[2] = 1 - c.sB, w[3] = c.sB;
+  };
+  Index node[4];
+  Real w[4];
+  for (const CPContact& c : contacts_) {
+    if (c.time > 0 || c.gap > touch) continue;
+    nodesOf(c, node, w);
+    for (int q = 0; q < 4; ++q) nodeWeight_[node[q]] += w[q];
+  }
+  for (const CPContact& c : contacts_) {
+    if (c.time > 0 || c.gap > touch) continue;
+    nodesOf(c, node, w);
+    Real F = 0;
+    for (int q = 0; q < 4; ++q) {
+      const Index k = node[q];
+      const Real d = f.secRadius[k] * (f.secFlat[k] - restFlat_[k]);
+      if (d > 0 && nodeWeight_[k] > 0) F += 0.5 * ks * d * w[q] / nodeWeight_[k];
+    }
+    if (F > 0) forces_.addYarn(f, c, F, ks, 0);
+  }
+  Real energy = 0;
+  for (std::size_t k = 0; k < restFlat_.size(); ++k) {
+    const Real d = f.secRadius[k] * (f.secFlat[k] - restFlat_[k]);
+    if (d > 0) energy += 0.5 * ks * d * d;
+  }
+  return energy;
+}
+
 Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
+  const ThreadCountScope threadCount(params_.threads);
   auto t = Clock::now();
   for (const RigidBody& b : bodies) b.validate();
+  const bool springs = params_.flattening == Flattening::Springs;
+  const bool flattens = params_.flattening != Flattening::None;
+  const bool penalty = params_.response == Response::Penalty;
+  if (springs) restoreSections(f);
   refit(f, dt);
   stats.seconds[0] += since(t);
   if (params_.yarnContacts) broad(f);
@@ -280,44 +350,76 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   stats.moving = 0;
   for (const CPContact& c : contacts_) stats.moving += c.time > 0;
   stats.flattened = 0;
-  stats.flattenPasses = flatten(f, params_.flattenPasses);
+  stats.flattenPasses = flattens ? flatten(f, params_.flattenPasses) : 0;
   stats.penetration = 0;
   for (const CPContact& c : contacts_) stats.penetration = std::max(stats.penetration, -c.gap);
-  law_.resolve(
-      f, contacts_,
-      [&](const CPContact& c) {
-        if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) return Real(0);
-        return flatteningCapacity(f, tangent_, c.cpA, c.normal, params_) +
-               flatteningCapacity(f, tangent_, c.cpB, c.normal, params_);
-      },
-      dt, params_, stats.impulses, bodyContacts_, &bodies);
-  bodyWork_ += stats.impulses.bodyWork;
+  stats.impulses = ImpulseReport{};
+  stats.correctionEnergy = 0;
+  Real added = 0;
+  if (!penalty) {
+    law_.resolve(
+        f, contacts_,
+        [&](const CPContact& c) {
+          if (!flattens || (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd))) return Real(0);
+          return flatteningCapacity(f, tangent_, c.cpA, c.normal, params_) +
+                 flatteningCapacity(f, tangent_, c.cpB, c.normal, params_);
+        },
+        dt, params_, stats.impulses, bodyContacts_, &bodies);
+    bodyWork_ += stats.impulses.bodyWork;
+    added += stats.impulses.energyChange;
+  }
+  // Force-based parts (law/NormalForces): penalty springs on the overlaps left after flattening,
+  // and the section springs. Their spring energy goes to the spring book (springEnergy), so what is
+  // returned is only what they dissipate and the bodies' work.
+  forces_.clear();
+  Real spring = 0;
+  if (penalty) {
+    const Real kp = params_.penaltyStiffness, zeta = params_.penaltyDamping;
+    for (const CPContact& c : contacts_)
+      if (c.time == 0 && c.gap < 0) forces_.addYarn(f, c, -kp * c.gap, kp, zeta), spring += 0.5 * kp * c.gap * c.gap;
+    for (const BodyContact& c : bodyContacts_)
+      if (c.time == 0 && c.gap < 0)
+        forces_.addBody(f, c, bodies, -kp * c.gap, kp, zeta), spring += 0.5 * kp * c.gap * c.gap;
+  }
+  if (springs) spring += addSectionSprings(f);
+  stats.forces = NormalForceReport{};
+  if (forces_.size() > 0) {
+    forces_.apply(f, &bodies, dt, stats.forces);
+    bodyWork_ += stats.forces.bodyWork;
+    added += stats.forces.bodyWork - stats.forces.dissipated;
+  }
+  stats.springEnergy = spring;
+  spring_ = spring + stats.forces.halfKick;
+  if (!springStarted_) spring0_ = spring_, springStarted_ = true;
   stats.bodyContacts = static_cast<long>(bodyContacts_.size());
   stats.bodyPenetration = 0;
   for (const BodyContact& c : bodyContacts_) stats.bodyPenetration = std::max(stats.bodyPenetration, -c.gap);
   stats.maxBodyPenetration = std::max(stats.maxBodyPenetration, stats.bodyPenetration);
-  stats.correctionEnergy = ImpulseLaw::correctPositions(f, contacts_, params_);
+  if (!penalty) stats.correctionEnergy = ImpulseLaw::correctPositions(f, contacts_, params_);
   stats.seconds[3] += since(t);
 
   ++stats.steps;
   stats.maxPenetration = std::max(stats.maxPenetration, stats.penetration);
   stats.maxUnresolved = std::max(stats.maxUnresolved, stats.impulses.unresolved);
   stats.maxResidual = std::max(stats.maxResidual, stats.impulses.residual);
-  return stats.impulses.energyChange + stats.correctionEnergy;
+  return added + stats.correctionEnergy;
 }
 
 Real CollisionStage::afterDrift(Fabric& f, Real dt) {
+  const ThreadCountScope threadCount(params_.threads);
   for (RigidBody& b : bodies) {
     b.pos += dt * b.vel;
     const Real angle = b.angVel.norm() * dt;  // YADE's rotation of a spherical body over the step
     if (angle > 0) b.ori = (Quat(Eigen::AngleAxis<Real>(angle, b.angVel.normalized())) * b.ori).normalized();
   }
+  if (params_.response == Response::Penalty) return 0;
   const Real dE = law_.restitute(f, params_, &bodies, &bodyWork_);
   stats.impulses.energyChange += dE;
   return dE;
 }
 
 Real CollisionStage::settle(Fabric& f, int maxPasses) {
+  const ThreadCountScope threadCount(params_.threads);
   Real left = 0;
   for (int outer = 0; outer < maxPasses; ++outer) {
     pairsValid_ = false;
@@ -333,6 +435,7 @@ Real CollisionStage::settle(Fabric& f, int maxPasses) {
 }
 
 Real CollisionStage::bodyOverlap(Fabric& f, int k) {
+  const ThreadCountScope threadCount(params_.threads);
   refit(f, 0);
   const RigidBody& b = bodies.at(k);
   Real worst = -INFINITY;
@@ -345,6 +448,7 @@ Real CollisionStage::bodyOverlap(Fabric& f, int k) {
 }
 
 Real CollisionStage::overlap(Fabric& f) {
+  const ThreadCountScope threadCount(params_.threads);
   pairsValid_ = false;
   refit(f, 0);
   broad(f);
@@ -355,6 +459,7 @@ Real CollisionStage::overlap(Fabric& f) {
 }
 
 void CollisionStage::candidatePairs(Fabric& f, BroadPhase which, std::vector<CPPair>& out) {
+  const ThreadCountScope threadCount(params_.threads);
   refit(f, 0);
   if (which == BroadPhase::YarnTree) tree.collide(f, grown_, filter_, out);
   else if (which == BroadPhase::Grid) grid.collide(f, grown_, filter_, out);

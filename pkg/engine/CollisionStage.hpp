@@ -3,7 +3,9 @@
 //   broad     candidate CP pairs (YarnTreeCollider, or the SweepAndPrune reference)
 //   narrow    static SAT contact, else the moving SAT's first contact within the step (geometry functor)
 //   respond   flatten sections (passes), impulses where flattening cannot absorb the approach, then
-//             positional correction of residual overlaps (law)
+//             positional correction of residual overlaps (law); or the alternatives of
+//             ContactParams::response / flattening: penalty forces on the overlaps, sections that
+//             never flatten, section springs (law/NormalForces; docs/collisions.md)
 // Rigid bodies (YADE's projectile, clamps: shape/RigidBody) join the same step: a broad phase of their
 // parts against the CPs (BodyCollider), the body geometry functor (geom/BodyContact), and their rows
 // in the same impulse solve; after the fabric's drift the bodies drift with their new velocities.
@@ -16,6 +18,7 @@
 #include "dynamics/ChainDynamics.hpp"
 #include "geom/CPContact.hpp"
 #include "law/ImpulseLaw.hpp"
+#include "law/NormalForces.hpp"
 #include <string>
 
 namespace woven {
@@ -33,6 +36,8 @@ struct CollisionStats {
   long flattened = 0;         ///< contacts whose overlap was (partly) taken up by flattening
   int flattenPasses = 0;      ///< passes made
   ImpulseReport impulses;     ///< the impulse solve
+  NormalForceReport forces;   ///< the penalty / section-spring forces (response penalty, flattening springs)
+  Real springEnergy = 0;      ///< energy held in those springs at x_n [J] (1/2 k_p delta^2 + 1/2 k_s (r0 eps)^2)
   Real penetration = 0;       ///< largest overlap left after flattening, before correction [m]
   Real correctionEnergy = 0;  ///< spring energy the positional correction put in [J]
   long bodyContacts = 0;      ///< CP-body contacts (static + moving)
@@ -63,6 +68,10 @@ class CollisionStage : public StepHook {
   /// Drifts the rigid bodies with their new velocities, then the restitution pass of the impulse
   /// law (nothing for e = 0).
   Real afterDrift(Fabric& f, Real dt) override;
+  /// Spring energy of the penalty contacts and section springs now (plus the half kick of their
+  /// forces, law/NormalForces), less its value at the first step [J].
+  Real springEnergy() const override { return spring_ - spring0_; }
+  Real springEnergyAtStart() const override { return spring0_; }
   Real takeBodyWork() override {
     const Real w = bodyWork_;
     bodyWork_ = 0;
@@ -118,6 +127,8 @@ class CollisionStage : public StepHook {
   void remapCache();
   void narrowBodies(const Fabric& f, Real dt);
   int flatten(Fabric& f, int maxPasses);
+  void restoreSections(Fabric& f);
+  Real addSectionSprings(const Fabric& f);
 
   ContactParams params_;
   PairFilter filter_;
@@ -130,14 +141,21 @@ class CollisionStage : public StepHook {
   std::vector<BodyCandidate> bodyPairs_;
   std::vector<BodyContact> bodyContacts_;
   Real bodyWork_ = 0;
-  std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per thread
-  std::vector<std::uint8_t> dirty_, dirtyYarn_;
+  std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per chunk of pairs
+  std::vector<long> reused_;                    // carried contacts per chunk of pairs
+  std::vector<Real> capacity_;                  // flatten: both CPs' flattening capacity per contact [m]
+  std::vector<std::uint8_t> dirty_, dirtyYarn_, outside_;
   std::vector<CPPair> keptPairs_, freshPairs_, cachePairs_;
   std::vector<PairCache> cache_, cacheOld_;
   std::vector<long> sectionStamp_;  // per CP: narrow phase in which its sections last changed
   long cacheClock_ = 0;
   bool pairsChanged_ = false;
   ImpulseLaw law_;
+  NormalForces forces_;
+  Real spring_ = 0, spring0_ = 0;
+  bool springStarted_ = false;
+  std::vector<Real> restFlat_, nodeWeight_;  // flattening Springs: each node's eps at the first step
+  Vec3Array restDir_;
 };
 
 }  // namespace woven

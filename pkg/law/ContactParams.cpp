@@ -4,6 +4,20 @@
 
 namespace woven {
 
+Response responseByName(const std::string& name) {
+  if (name == "impulse") return Response::Impulse;
+  if (name == "penalty") return Response::Penalty;
+  throw ParameterError("response", "'" + name + "'", "'impulse' (Eq. 5 impulses) or 'penalty' (spring forces k_p delta)");
+}
+
+Flattening flatteningByName(const std::string& name) {
+  if (name == "geometric") return Flattening::Geometric;
+  if (name == "none") return Flattening::None;
+  if (name == "springs") return Flattening::Springs;
+  throw ParameterError("flattening", "'" + name + "'",
+                       "'geometric' (free up to the MCD), 'none' (sections fixed) or 'springs' (Eq. 7 section springs)");
+}
+
 void ContactParams::validate() const {
   require(std::isfinite(restitution) && restitution >= 0 && restitution <= 1, "restitution", restitution, "[0, 1]");
   require(std::isfinite(friction) && friction >= 0, "friction", friction, "[0, inf) (Coulomb coefficient)");
@@ -17,7 +31,13 @@ void ContactParams::validate() const {
           "position_correction", positionCorrection, "[0, 1]");
   require(std::isfinite(correctionSlop) && correctionSlop >= 0, "correction_slop", correctionSlop, "[0, inf) m");
   require(std::isfinite(cacheDistance) && cacheDistance >= 0, "contact_cache", cacheDistance, "[0, inf) m (0: off)");
-  require(threads >= 1 && threads <= 64, "threads", threads, "[1, 64]");
+  require(threads >= 0 && threads <= 64, "threads", threads, "[0, 64] (0: OpenMP's count)");
+  require(std::isfinite(penaltyStiffness) && penaltyStiffness > 0, "penalty_stiffness", penaltyStiffness, "(0, inf) N/m");
+  require(std::isfinite(penaltyDamping) && penaltyDamping >= 0 && penaltyDamping < 1, "penalty_damping", penaltyDamping,
+          "[0, 1) (damping ratio)");
+  require(std::isfinite(sectionStiffness) && sectionStiffness > 0, "section_stiffness", sectionStiffness, "(0, inf) N/m");
+  require(static_cast<int>(response) <= 1, "response", static_cast<int>(response), "'impulse' or 'penalty'");
+  require(static_cast<int>(flattening) <= 2, "flattening", static_cast<int>(flattening), "'geometric', 'none' or 'springs'");
   require(selfExclude >= 1, "self_exclude", selfExclude, "[1, inf) elements (1: CPs sharing a node)");
 }
 

@@ -2,8 +2,26 @@
 #pragma once
 #include "core/Types.hpp"
 #include "shape/Section.hpp"
+#include <cstdint>
+#include <string>
 
 namespace woven {
+
+/// How overlaps that flattening leaves are resolved (docs/collisions.md, "Response and section models").
+enum class Response : std::uint8_t {
+  Impulse = 0,  ///< impulses of Eq. 5 solved by Gauss-Seidel (law/ImpulseLaw), the paper's response
+  Penalty = 1   ///< a normal spring force k_p delta (+ dashpot) on every overlapping contact (law/NormalForces)
+};
+/// What the cross-sections do under contact (paper Sec. 5.2.2).
+enum class Flattening : std::uint8_t {
+  Geometric = 0,  ///< flatten up to the MCD at no force (the paper's default model)
+  None = 1,       ///< sections never change during the steps (settle() still shapes a built weave)
+  Springs = 2     ///< flatten as Geometric, and each flattened node section pushes back with k_s r0 eps (Eq. 7)
+};
+/// "impulse" or "penalty"; throws ParameterError("response") otherwise.
+Response responseByName(const std::string& name);
+/// "geometric", "none" or "springs"; throws ParameterError("flattening") otherwise.
+Flattening flatteningByName(const std::string& name);
 
 struct ContactParams {
   Real restitution = 0.0;     ///< e of Eq. 5 in [0, 1]; 0: "at the next time moment both nodes move together"
@@ -35,9 +53,25 @@ struct ContactParams {
   /// Contacts between yarns (CP-CP) on; false leaves only the contacts with rigid bodies (yarns then
   /// pass through each other: for scenes where only the projectile matters, and for comparisons).
   bool yarnContacts = true;
-  /// Threads for the narrow phase (>= 1). Each candidate pair is tested on its own and the contacts
-  /// are gathered in pair order, so any count gives the same contacts, bit for bit.
-  int threads = 1;
+  /// Threads of the collision stage, in [0, 64]: 0 follows woven's count (woven::threads(): OpenMP's,
+  /// i.e. OMP_NUM_THREADS or YADE's -j N, unless woven.set_threads forced one), >= 1 forces this
+  /// count. Any count gives the same contacts and the same state, bit for bit (core/Parallel.hpp).
+  int threads = 0;
+
+  Response response = Response::Impulse;
+  /// Penalty stiffness k_p [N/m] > 0 (response Penalty): F = k_p delta on a contact overlapping by
+  /// delta, yarn-yarn and yarn-body alike. 1e5 N/m: about the transverse stiffness of a KM2 yarn
+  /// over a contact one yarn width long (E_T ~ 1.3 GPa x 0.1 mm ~ 1e5 N/m; docs/collisions.md),
+  /// and stable (dt <= 2 sqrt(m_eff / k_p)) at the default ballistic time step.
+  Real penaltyStiffness = 1e5;
+  /// Normal damping ratio zeta in [0, 1) of the penalty contacts: c = 2 zeta sqrt(k_p m_eff).
+  Real penaltyDamping = 0.0;
+  Flattening flattening = Flattening::Geometric;
+  /// Stiffness k_s [N/m] > 0 of one node section's spring (flattening Springs, paper Eq. 7): a section
+  /// flattened by r0 eps pushes back with k_s r0 eps. 1e4 N/m: a tenth of k_p, since a yarn's
+  /// filaments rearrange far more easily than a solid section compresses (not calibrated: the
+  /// paper gives no k_i).
+  Real sectionStiffness = 1e4;
 
   /// Throws ParameterError naming the parameter and its allowed range.
   void validate() const;

@@ -1,4 +1,5 @@
 #include "law/ImpulseLaw.hpp"
+#include "core/Parallel.hpp"
 #include <algorithm>
 #include <cmath>
 
@@ -66,17 +67,31 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   rep = ImpulseReport{};
   rows_.clear();
   loadBodies(bodies);
-  for (std::size_t c = 0; c < contacts.size(); ++c) {
+  // Which contacts need a row, each on its own (threads; the capacity is the costly part and reads
+  // nothing the rows change); then the rows in contact order.
+  const Index nc = static_cast<Index>(contacts.size());
+  allowed_.resize(contacts.size());
+  parallelFor(nc, 256, threads(), [&](Index c) {
+    Index node[4];
+    Real w[4];
+    nodesAndWeights(f, contacts[c], node, w);
+    const Real vn0 = relativeVelocity(f, node, w).dot(contacts[c].normal);
+    // Approach the room absorbs: the gap, and what flattening can still take, unless the contact is
+    // still overlapping after the flattening passes (flattening has stopped working for it).
+    const Real gap = contacts[c].gap;
+    allowed_[c] = NAN;
+    if (!(vn0 < -std::max(gap, Real(0)) / dt - p.tolerance)) return;  // separating, resting (Eq. 4), or within the gap
+    const Real allowed = (gap < 0 ? 0.0 : gap + capacity(contacts[c])) / dt;
+    if (!(vn0 < -allowed - p.tolerance)) return;  // taken up by flattening
+    allowed_[c] = allowed;
+  });
+  for (Index c = 0; c < nc; ++c) {
+    const Real allowed = allowed_[c];
+    if (std::isnan(allowed)) continue;
     Row r;
     nodesAndWeights(f, contacts[c], r.node, r.w);
     r.n = contacts[c].normal;
     r.vn0 = relativeVelocity(f, r.node, r.w).dot(r.n);
-    // Approach the room absorbs: the gap, and what flattening can still take, unless the contact is
-    // still overlapping after the flattening passes (flattening has stopped working for it).
-    const Real gap = contacts[c].gap;
-    if (!(r.vn0 < -std::max(gap, Real(0)) / dt - p.tolerance)) continue;  // separating, resting (Eq. 4), or within the gap
-    const Real allowed = (gap < 0 ? 0.0 : gap + capacity(contacts[c])) / dt;
-    if (!(r.vn0 < -allowed - p.tolerance)) continue;  // taken up by flattening
     Real K = 0;
     for (int k = 0; k < 4; ++k) K += r.w[k] * r.w[k] * f.invMass[r.node[k]];
     if (!(K > 0)) continue;  // both CPs kinematic
@@ -138,15 +153,17 @@ void ImpulseLaw::keepVelocities(const Fabric& f) {
 // whose impulse takes back each step the velocity the kick gave, would book (m/2)(a dt)^2 of
 // dissipation every step that the motion never had.)
 Real ImpulseLaw::energyChange(const Fabric& f) const {
-  Real dE = 0;
-  for (std::size_t k = 0; k < touched_.size(); ++k) {
-    const Index i = touched_[k];
-    if (f.invMass[i] == 0) continue;
-    const Vec3 dv = f.vel[i] - vBefore_[k];
-    const Vec3 vn = vBefore_[k] - (0.5 * dt_ * f.invMass[i]) * f.force[i];
-    dE += f.mass[i] * (vn.dot(dv) + 0.5 * dv.squaredNorm());
-  }
-  return dE;
+  return chunkedSum(static_cast<Index>(touched_.size()), 4096, threads(), Real(0), [&](Index k0, Index k1) {
+    Real dE = 0;
+    for (Index k = k0; k < k1; ++k) {
+      const Index i = touched_[k];
+      if (f.invMass[i] == 0) continue;
+      const Vec3 dv = f.vel[i] - vBefore_[k];
+      const Vec3 vn = vBefore_[k] - (0.5 * dt_ * f.invMass[i]) * f.force[i];
+      dE += f.mass[i] * (vn.dot(dv) + 0.5 * dv.squaredNorm());
+    }
+    return dE;
+  });
 }
 
 int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {

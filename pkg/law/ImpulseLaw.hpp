@@ -92,6 +92,7 @@ class ImpulseLaw {
   void keepVelocities(const Fabric& f);      // of the touched nodes, before the impulses
   Real energyChange(const Fabric& f) const;  // kinetic energy of the integer step the impulses add [J]
   std::vector<Row> rows_;
+  std::vector<Real> allowed_;  // resolve: per contact the approach speed its room allows [m/s], NaN: no row
   std::vector<BodyVelocity> bodyVel_;
   Vec3Array vBefore_;
   Real dt_ = 0;

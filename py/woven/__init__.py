@@ -34,7 +34,8 @@ _ensure_yade()
 
 from . import _woven  # noqa: E402
 from ._woven import (FabricEngine, Fabric, Pattern, YarnMaterial, YarnSection, WeaveParams,  # noqa: E402,F401
-                     InstabilityError, peirce_from_height, peirce_from_crimp, obb_contact, obb_first_contact)
+                     InstabilityError, peirce_from_height, peirce_from_crimp, obb_contact, obb_first_contact,
+                     set_threads, threads, openmp_threads)
 from .weave import weave, pattern, WEAVE_KEYS  # noqa: E402,F401
 from .engine import attach  # noqa: E402,F401
 from .arrays import (positions, velocities, strains, tensions, masses, rest_lengths,  # noqa: E402,F401

@@ -3,6 +3,8 @@
     woven.contact.enable(engine, mcd=0.6, restitution=0)   # same keys as CONTACT_KEYS, SI units
 """
 
+from . import _woven
+
 # key: (default, unit, description); the keys of FabricEngine.enable_collisions.
 CONTACT_KEYS = {
     'restitution': (0.0, '', 'coefficient of restitution e of Eq. 5, in [0, 1]'),
@@ -18,10 +20,21 @@ CONTACT_KEYS = {
     'self_exclude': (1, '', 'CPs of one yarn this many elements apart never collide (raised to the section size)'),
     'broad_phase': ('tree', '', "'tree' (OBB tree per yarn), 'grid' (uniform grid of cells) or 'sap' (sweep and prune)"),
     'skin': (5e-6, 'm', 'Verlet skin: candidate pairs are kept while every CP box stays inside its box grown by this'),
-    'threads': (1, '', 'threads of the narrow phase (same contacts, bit for bit, for any count)'),
+    'threads': (0, '', 'threads of the collision stage in [0, 64]; 0: woven.threads() (OMP_NUM_THREADS, yade -j N); the same results, bit for bit, for any count'),
     'contact_cache': (1e-7, 'm', 'a contact is carried to the next step while its four nodes move together to within this (0: test every pair every step)'),
+    'response': ('impulse', '', "'impulse' (Eq. 5 impulses, the paper) or 'penalty' (force k_p * overlap; docs/collisions.md)"),
+    'penalty_stiffness': (1e5, 'N/m', 'penalty stiffness k_p > 0 (response=penalty), yarn-yarn and yarn-body'),
+    'penalty_damping': (0.0, '', 'penalty damping ratio zeta in [0, 1): c = 2 zeta sqrt(k_p m_eff)'),
+    'flattening': ('geometric', '', "'geometric' (free up to the MCD, the paper), 'none' (sections fixed) or 'springs' (Eq. 7 section springs)"),
+    'section_stiffness': (1e4, 'N/m', 'section spring k_s > 0 (flattening=springs): a node flattened by r0*eps pushes back k_s*r0*eps'),
     'yarn_contacts': (True, '', 'contacts between yarns (False: only with rigid bodies; yarns pass through each other)'),
 }
+
+
+def penalty_dt_limit(m, k):
+    """Largest stable time step [s] of a penalty contact of effective mass m [kg] and stiffness k [N/m]:
+    2 sqrt(m / k) (central differences on an undamped spring; docs/collisions.md)."""
+    return _woven.penalty_dt_limit(float(m), float(k))
 
 
 def enable(engine, **kw):

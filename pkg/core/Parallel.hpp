@@ -1,0 +1,115 @@
+// Threads of the hot loops (OpenMP), with results that do not depend on the thread count.
+//
+// Rules every parallel loop of woven follows (docs/design.md, "Threads"):
+//  - a loop writes only its own items (a node, an element, a pair slot): no atomics, no scatter;
+//  - sums are taken per chunk of a fixed size (independent of the thread count), each chunk in index
+//    order, and the chunk sums added serially in chunk order: the same bits at any thread count;
+//  - lists a loop produces are kept per chunk and joined in chunk order.
+// Without OpenMP everything runs on the calling thread and gives the same bits.
+#pragma once
+#include "core/Types.hpp"
+#include <vector>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace woven {
+
+/// OpenMP's thread count for the next parallel region of the calling thread (OMP_NUM_THREADS,
+/// YADE's -j N, omp_set_num_threads); 1 without OpenMP.
+inline int openmpThreads() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+namespace detail {
+inline int& threadSetting() {
+  static int n = 0;  // 0: follow OpenMP
+  return n;
+}
+inline int& threadOverride() {
+  thread_local int n = 0;  // ThreadCountScope of the calling thread, 0: none
+  return n;
+}
+}  // namespace detail
+
+/// Threads of woven's loops: n >= 1 forces that count in every thread (YADE runs the engines in its
+/// own thread, where omp_set_num_threads called from the script would not reach); 0 follows
+/// openmpThreads() of the thread that steps. Not for changing while a step runs.
+inline void setThreads(int n) { detail::threadSetting() = n < 0 ? 0 : n; }
+/// The count woven's loops use now (>= 1).
+inline int threads() {
+  if (const int o = detail::threadOverride(); o > 0) return o;
+  const int n = detail::threadSetting();
+  return n > 0 ? n : openmpThreads();
+}
+
+/// While it lives, threads() of the calling thread returns n (n >= 1; 0 changes nothing): how
+/// ContactParams::threads sets the collision stage's count.
+class ThreadCountScope {
+ public:
+  explicit ThreadCountScope(int n) : saved_(detail::threadOverride()) {
+    if (n > 0) detail::threadOverride() = n;
+  }
+  ~ThreadCountScope() { detail::threadOverride() = saved_; }
+  ThreadCountScope(const ThreadCountScope&) = delete;
+  ThreadCountScope& operator=(const ThreadCountScope&) = delete;
+
+ private:
+  int saved_;
+};
+
+/// Items below which a loop of light bodies (a node, a box) stays on one thread.
+constexpr Index kParallelGrain = 2048;
+
+/// body(i) for i in [0, n), split over `nThreads` threads when n >= grain (a region costs a few us).
+/// body must write only what belongs to i.
+template <class Body>
+inline void parallelFor(Index n, Index grain, int nThreads, Body&& body) {
+#ifdef _OPENMP
+  if (nThreads > 1 && n >= grain) {
+#pragma omp parallel for schedule(static) num_threads(nThreads)
+    for (Index i = 0; i < n; ++i) body(i);
+    return;
+  }
+#endif
+  for (Index i = 0; i < n; ++i) body(i);
+}
+
+/// parallelFor with dynamic scheduling, for bodies of uneven cost (chunks of pairs); the same rule:
+/// body writes only what belongs to i, so the schedule changes no result.
+template <class Body>
+inline void parallelForDynamic(Index n, Index grain, int nThreads, Body&& body) {
+#ifdef _OPENMP
+  if (nThreads > 1 && n >= grain) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nThreads)
+    for (Index i = 0; i < n; ++i) body(i);
+    return;
+  }
+#endif
+  for (Index i = 0; i < n; ++i) body(i);
+}
+
+/// Number of fixed chunks of `chunk` items covering [0, n).
+inline Index chunkCount(Index n, Index chunk) { return n > 0 ? (n + chunk - 1) / chunk : 0; }
+
+/// Sum of body(begin, end) over the fixed chunks [k*chunk, min(n, (k+1)*chunk)), each chunk's sum
+/// taken by body in index order and the chunk sums added in chunk order: bit-identical for any thread
+/// count. T: Real, Vec3 or a struct with operator+=; zero its neutral value.
+template <class T, class Body>
+inline T chunkedSum(Index n, Index chunk, int nThreads, const T& zero, Body&& body) {
+  const Index nc = chunkCount(n, chunk);
+  std::vector<T> part(static_cast<std::size_t>(nc), zero);
+  parallelFor(nc, 2, nThreads, [&](Index k) {
+    const Index b = k * chunk;
+    part[k] = body(b, b + chunk < n ? b + chunk : n);
+  });
+  T sum = zero;
+  for (const T& p : part) sum += p;
+  return sum;
+}
+
+}  // namespace woven

@@ -1,0 +1,74 @@
+"""scripts/compare.py in its quick mode: every method runs on the same scene, the reference converges
+in the time step, the stability map finds the penalty method's blow-up where theory puts it and
+the guard refusing woven's over-critical steps, and the outputs of the contract are written."""
+import csv
+import math
+import os
+
+import pytest
+from conftest import run_scene
+
+
+@pytest.fixture(scope='module')
+def quick(tmp_path_factory):
+    out = tmp_path_factory.mktemp('compare')
+    rc, log, s = run_scene('compare.py', out, 'quick=1', timeout=1500)
+    return out, rc, log, s
+
+
+def test_every_method_runs_and_the_outputs_are_written(quick):
+    out, rc, log, s = quick
+    assert rc == 0, log[-3000:]
+    assert s['status'] == 'ok'
+    rows = s['measured']['rows']
+    assert {r['method'] for r in rows} == {'impulse', 'penalty', 'no_flattening', 'section_springs', 'yade_grid'}
+    for name in ('cases.csv', 'table.md', 'scenes.md', 'pareto.png', 'stability.csv', 'stability.png'):
+        assert os.path.getsize(out / name) > 100, name
+    with open(out / 'cases.csv') as f:
+        assert len(list(csv.DictReader(f))) == len(rows)
+
+
+def test_reference_converges_in_the_time_step(quick):
+    out, rc, log, s = quick
+    rows = s['measured']['rows']
+    ref = [r for r in rows if r['reference']]
+    assert len(ref) == 1 and ref[0]['velocity_error'] == 0
+    # the same resolution at twice the reference's time step: within 5 % of its velocity drop
+    same = [r for r in rows if r['method'] == 'impulse' and not r['reference'] and r['cp_per_span'] == ref[0]['cp_per_span']]
+    assert same and all(r['velocity_error'] < 0.05 for r in same), same
+    assert all(r['energy_error'] < 0.01 for r in rows if r['method'] == 'impulse')
+
+
+def test_stability_map_finds_the_penalty_limit_and_the_guard(quick):
+    out, rc, log, s = quick
+    cells = s['measured']['stability']
+    # woven refuses a step above the chain's critical one (ballistic.py: safety in (0, 1])
+    assert all(c['result'] == 'refused' for c in cells if c['method'] == 'impulse' and c['dt_over_dt_crit'] > 1)
+    # penalty: stable only below dt = 2 sqrt(m_eff / k). Node mass of a 0.75 mm CP of KM2 706 yarn:
+    m = 1440 * 4.63e-8 * 0.747e-3
+    dt_crit = 0.747e-3 / math.sqrt(90e9 / 1440)
+    checked = 0
+    for c in cells:
+        if c['method'] != 'penalty' or c['dt_over_dt_crit'] > 1:
+            continue
+        dt = c['dt_over_dt_crit'] * dt_crit
+        limit = 2 * math.sqrt(0.5 * m / c['stiffness'])  # two equal nodes: m_eff = m / 2
+        if dt > limit:
+            assert c['result'] == 'blow-up', c
+            checked += 1
+        elif dt < 0.25 * limit:
+            assert c['result'] != 'blow-up', c
+            checked += 1
+    assert checked >= 2
+
+
+def test_smith_error_of_woven_chain_is_small(quick):
+    out, rc, log, s = quick
+    smith = [r for r in s['measured']['scenes'] if r['scene'] == 'smith' and r['model'] == 'woven']
+    assert smith and all(r['strain_error'] < 0.01 for r in smith)
+    assert min(r['wave_speed_error'] for r in smith) < 0.02
+
+
+def test_bad_method_names_the_key(tmp_path):
+    rc, log, s = run_scene('compare.py', tmp_path, 'methods=impulse,magic')
+    assert rc != 0 and 'methods = ' in log and 'allowed' in log
