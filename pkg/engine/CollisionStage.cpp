@@ -380,7 +380,7 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
     added += stats.forces.bodyWork - stats.forces.dissipated;
   }
   stats.springEnergy = spring;
-  spring_ = spring + stats.forces.halfKick;
+  spring_ = spring + stats.forces.halfDrift;
   if (!springStarted_) spring0_ = spring_, springStarted_ = true;
   stats.bodyContacts = static_cast<long>(bodyContacts_.size());
   stats.bodyPenetration = 0;

@@ -68,8 +68,9 @@ class CollisionStage : public StepHook {
   /// Drifts the rigid bodies with their new velocities, then the restitution pass of the impulse
   /// law (nothing for e = 0).
   Real afterDrift(Fabric& f, Real dt) override;
-  /// Spring energy of the penalty contacts and section springs now (plus the half kick of their
-  /// forces, law/NormalForces), less its value at the first step [J].
+  /// Spring energy of the penalty contacts and section springs half way through the step's drift
+  /// (law/NormalForces: the pair of the synchronised kinetic energy), less its value at the first
+  /// step [J].
   Real springEnergy() const override { return spring_ - spring0_; }
   Real takeBodyWork() override {
     const Real w = bodyWork_;
