@@ -156,7 +156,7 @@ def sample():
                dissipated_impulses=dissipated, damped=E['damped'], released=E['released'],
                contacts=s['contacts'], body_contacts=s['body_contacts'], broken=eng.broken_elements,
                balance=(ke_p + E['kinetic'] + E['elastic'] + E['damped'] + dissipated + E['released'] + E['spring']
-                        - KE0 - fabric_initial - (E['work'] - E['body_work'])) / KE0)
+                        - KE0 - E['initial'] - (E['work'] - E['body_work'])) / KE0)
     rows.append(row)
     plot.addData(**row)
 

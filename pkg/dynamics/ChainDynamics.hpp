@@ -41,8 +41,8 @@ class StepHook {
   /// Work the hook's rigid bodies did on the fabric in the calls since the last take [J]: part of
   /// the energy the calls returned that is not the contacts' dissipation (the books take it as work).
   virtual Real takeBodyWork() { return 0; }
-  /// Energy the hook's contact springs hold now, after beforeDrift, less what they held at its first
-  /// call [J] (EnergyBooks::spring). Kept out of the energy beforeDrift returns, so that an unstable
+  /// Energy the hook's contact springs hold now, after beforeDrift [J] (EnergyBooks::spring); what
+  /// they hold at its first call joins EnergyBooks::initial. Kept out of the energy beforeDrift returns, so that an unstable
   /// spring shows in the books' total (the blow-up check) instead of being booked away as contact input.
   virtual Real springEnergy() const { return 0; }
 };
@@ -127,6 +127,7 @@ class ChainDynamics {
 
   Fabric& f_;
   Loads loads_;
+  bool springSeen_ = false;  // the hook's spring energy at its first step went into books_.initial
   EnergyBooks books_;   // kinetic of the previous integer step, elastic/damped/work of the current
   long step_ = 0;
   Real time_ = 0;
