@@ -177,8 +177,8 @@ def sample():
     row = dict(t=O.time, vz=vz, z=proj.state.pos[2], ke_projectile=ke_p, ke_fabric=E['kinetic'], elastic=E['elastic'],
                dissipated_impulses=dissipated, damped=E['damped'], released=E['released'],
                contacts=s['contacts'], body_contacts=s['body_contacts'], broken=eng.broken_elements,
-               balance=(ke_p + E['kinetic'] + E['elastic'] + E['damped'] + dissipated + E['released']
-                        - KE0 - fabric_initial - (E['work'] - E['body_work'])) / KE0)
+               balance=(ke_p + E['kinetic'] + E['elastic'] + E['damped'] + dissipated + E['released'] + E['spring']
+                        - KE0 - E['initial'] - (E['work'] - E['body_work'])) / KE0)
     rows.append(row)
     plot.addData(**row)
 

@@ -41,13 +41,10 @@ class StepHook {
   /// Work the hook's rigid bodies did on the fabric in the calls since the last take [J]: part of
   /// the energy the calls returned that is not the contacts' dissipation (the books take it as work).
   virtual Real takeBodyWork() { return 0; }
-  /// Energy the hook's contact springs hold now, after beforeDrift, less what they held at its first
-  /// call [J] (EnergyBooks::spring). Kept out of the energy beforeDrift returns, so that an unstable
+  /// Energy the hook's contact springs hold now, after beforeDrift [J] (EnergyBooks::spring); what
+  /// they hold at its first call joins EnergyBooks::initial. Kept out of the energy beforeDrift returns, so that an unstable
   /// spring shows in the books' total (the blow-up check) instead of being booked away as contact input.
   virtual Real springEnergy() const { return 0; }
-  /// Energy the springs held at the first step [J] (settled overlaps): it may turn into motion, so
-  /// the blow-up budget counts it with the initial energy.
-  virtual Real springEnergyAtStart() const { return 0; }
 };
 
 class ChainDynamics {
@@ -130,11 +127,11 @@ class ChainDynamics {
 
   Fabric& f_;
   Loads loads_;
+  bool springSeen_ = false;  // the hook's spring energy at its first step went into books_.initial
   EnergyBooks books_;   // kinetic of the previous integer step, elastic/damped/work of the current
   long step_ = 0;
   Real time_ = 0;
   Real dtPrev_ = 0;
-  Real springAtStart_ = 0;  // StepHook::springEnergyAtStart of the last step [J]
   Real dtCrit_ = 0;     // criticalTimeStep of the fabric: the engine's dt limit and the blow-up budget
   Breakage breakage_;
   Vec3Array edge_;     // springForces: force of each chunk's first CP on the node the chunk before assigns

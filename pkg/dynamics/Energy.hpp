@@ -17,10 +17,10 @@ struct EnergyBooks {
   Real contact = 0;     ///< energy taken out by the contact stage since the start [J] (impulses take, corrections give)
   Real contactInput = 0;  ///< energy the contact stage put in, summed step by step [J] (>= 0)
   /// Energy held now in the contact springs of a force-based response (penalty contacts 1/2 k_p delta^2,
-  /// section springs 1/2 k_s (r0 eps)^2: docs/collisions.md), less what they held at the first step [J].
+  /// section springs 1/2 k_s (r0 eps)^2: docs/collisions.md); what they held at the first step is in initial [J].
   Real spring = 0;
   Real released = 0;    ///< elastic energy of broken elements, released at their break [J]
-  Real initial = 0;     ///< kinetic + elastic at step 0 [J]
+  Real initial = 0;     ///< kinetic + elastic at step 0 (+ the contact springs' energy then) [J]
 
   Real total() const { return kinetic + elastic + damped + contact + spring + released; }
   /// (kinetic + elastic + damped + contact + spring + released) - (initial + work) [J]

@@ -41,7 +41,6 @@ void CollisionStage::setParams(const ContactParams& p) {
   params_ = p;
   pairsValid_ = false;
   invalidateCache();  // contacts measured with other parameters
-  springStarted_ = false;
   restFlat_.clear();
   filter_.selfExclude = p.selfExclude;
   filter_.yarnExclude.clear();  // configured again for the fabric at the next refit
@@ -399,8 +398,7 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
     added += stats.forces.bodyWork - stats.forces.dissipated;
   }
   stats.springEnergy = spring;
-  spring_ = spring + stats.forces.halfKick;
-  if (!springStarted_) spring0_ = spring_, springStarted_ = true;
+  spring_ = spring + stats.forces.halfDrift;
   stats.bodyContacts = static_cast<long>(bodyContacts_.size());
   stats.bodyPenetration = 0;
   for (const BodyContact& c : bodyContacts_) stats.bodyPenetration = std::max(stats.bodyPenetration, -c.gap);

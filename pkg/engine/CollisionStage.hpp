@@ -68,10 +68,9 @@ class CollisionStage : public StepHook {
   /// Drifts the rigid bodies with their new velocities, then the restitution pass of the impulse
   /// law (nothing for e = 0).
   Real afterDrift(Fabric& f, Real dt) override;
-  /// Spring energy of the penalty contacts and section springs now (plus the half kick of their
-  /// forces, law/NormalForces), less its value at the first step [J].
-  Real springEnergy() const override { return spring_ - spring0_; }
-  Real springEnergyAtStart() const override { return spring0_; }
+  /// Spring energy of the penalty contacts and section springs half way through the step's drift
+  /// (law/NormalForces: the pair of the synchronised kinetic energy) [J].
+  Real springEnergy() const override { return spring_; }
   Real takeBodyWork() override {
     const Real w = bodyWork_;
     bodyWork_ = 0;
@@ -152,8 +151,7 @@ class CollisionStage : public StepHook {
   bool pairsChanged_ = false;
   ImpulseLaw law_;
   NormalForces forces_;
-  Real spring_ = 0, spring0_ = 0;
-  bool springStarted_ = false;
+  Real spring_ = 0;
   std::vector<Real> restFlat_, nodeWeight_;  // flattening Springs: each node's eps at the first step
   Vec3Array restDir_;
 };

@@ -56,20 +56,13 @@ void NormalForces::apply(Fabric& f, std::vector<RigidBody>* bodies, Real dt, Nor
   Real ke0 = 0;
   if (bodies)
     for (const RigidBody& b : *bodies) ke0 += b.dynamic() ? b.kineticEnergy() : 0;
-  marked_.resize(f.pos.size(), 0);
-  touched_.clear();
   for (std::size_t k = 0; k < rows_.size(); ++k) {
     const Row& r = rows_[k];
     if (!(r.mEff > 0)) continue;  // both sides kinematic
     vn0_[k] = normalVelocity(f, bodies, r);
     force_[k] = std::max(Real(0), r.spring - r.damper * vn0_[k]);
     rep.rows += force_[k] > 0;
-    if (force_[k] > 0)
-      for (Index i : r.node)
-        if (!marked_[i]) marked_[i] = 1, touched_.push_back(i);
   }
-  vBefore_.resize(touched_.size());
-  for (std::size_t k = 0; k < touched_.size(); ++k) vBefore_[k] = f.vel[touched_[k]];
   for (std::size_t k = 0; k < rows_.size(); ++k) {
     if (force_[k] == 0) continue;
     const Row& r = rows_[k];
@@ -85,19 +78,13 @@ void NormalForces::apply(Fabric& f, std::vector<RigidBody>* bodies, Real dt, Nor
       b.angVel += b.invInertiaWorld() * r.arm.cross(J);
     }
   }
-  // Dashpot work: the force beyond the spring, against the mean normal speed over the kick.
+  // Dashpot work: the force beyond the spring, against the mean normal speed over the kick; and
+  // the springs' energy change over the first half of the drift (header).
   for (std::size_t k = 0; k < rows_.size(); ++k) {
-    if (force_[k] == 0) continue;
-    const Real vn = 0.5 * (vn0_[k] + normalVelocity(f, bodies, rows_[k]));
-    rep.dissipated += -(force_[k] - rows_[k].spring) * vn * dt;
-  }
-  for (std::size_t k = 0; k < touched_.size(); ++k) {
-    const Index i = touched_[k];
-    marked_[i] = 0;
-    if (f.invMass[i] == 0) continue;
-    const Vec3 dv = f.vel[i] - vBefore_[k];
-    const Vec3 vn = vBefore_[k] - (0.5 * dt * f.invMass[i]) * f.force[i];
-    rep.halfKick += f.mass[i] * (0.5 * vn.dot(dv) + 0.125 * dv.squaredNorm());
+    if (!(rows_[k].mEff > 0)) continue;
+    const Real vn1 = normalVelocity(f, bodies, rows_[k]);
+    rep.halfDrift -= 0.5 * dt * rows_[k].spring * vn1;
+    if (force_[k] > 0) rep.dissipated += -(force_[k] - rows_[k].spring) * 0.5 * (vn0_[k] + vn1) * dt;
   }
   if (bodies)
     for (const RigidBody& b : *bodies) rep.bodyWork += b.dynamic() ? -b.kineticEnergy() : 0;

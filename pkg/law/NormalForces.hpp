@@ -11,10 +11,11 @@
 // velocities before any is applied (a force evaluation, as in the element springs: order-free).
 // The spring energy belongs to the caller (it knows the springs); the dashpot's dissipation, the
 // rigid bodies' work and the half-kick term below are reported here for the energy books.
-// Energy: applied as F dt on v_{n+1/2}, the force is a leapfrog force evaluated at x_n, so
-// kinetic(v_n) + spring(x_n) is conserved to O(dt^2) with v_n = v_{n+1/2} - (dt/2) a_n. The chain's
-// kinetic book takes v_n before the hook runs, without this force's half kick dv/2: the kinetic
-// energy that half kick adds, m (v_n . dv/2 + dv^2/8), is reported (halfKick) for the spring book.
+// Energy: the chain's energy books pair the kinetic energy of the synchronised velocities at x_{n+1}
+// (v_{n+1/2} + dt/2 a_{n+1}, which cannot hold these forces' half kick at x_{n+1}: it is not known
+// yet) with the spring energy half way through the drift, U(x_{n+1/2}) = U(x_n) - F_s vn dt/2 to
+// first order (vn the rows' normal speed after the kick): the leapfrog pair that is conserved to
+// O(dt^2). That drift term is reported (halfDrift) for the spring book.
 // Stability: a contact is a mass-spring pair m_eff, k: stable for dt <= 2 sqrt(m_eff / k)
 // (penaltyDtLimit). Nothing guards against a larger dt here: the instability is shown, not hidden.
 #pragma once
@@ -22,7 +23,6 @@
 #include "geom/BodyContact.hpp"
 #include "geom/CPContact.hpp"
 #include "shape/RigidBody.hpp"
-#include <cstdint>
 #include <vector>
 
 namespace woven {
@@ -35,7 +35,7 @@ struct NormalForceReport {
   long rows = 0;          ///< contacts that received a force
   Real dissipated = 0;    ///< work of the dashpots taken out of the motion in the step [J] (>= 0 up to O(dt^2))
   Real bodyWork = 0;      ///< work the rigid bodies did on the fabric [J] (as ImpulseReport::bodyWork)
-  Real halfKick = 0;      ///< kinetic energy of step n the forces' first half kick adds (see above) [J]
+  Real halfDrift = 0;     ///< change of the spring energy over the first half of the drift, -sum F_s vn dt/2 [J]
 };
 
 class NormalForces {
@@ -67,9 +67,7 @@ class NormalForces {
   Real normalVelocity(const Fabric& f, const std::vector<RigidBody>* bodies, const Row& r) const;
   std::vector<Row> rows_;
   std::vector<Real> force_, vn0_;
-  std::vector<Index> touched_;
-  std::vector<std::uint8_t> marked_;
-  Vec3Array vBefore_;
+
 };
 
 }  // namespace woven
