@@ -84,7 +84,7 @@ DT_KEY = {'yade_grid': 'dt_factor'}  # the others: 'safety' (fraction of the cha
 SCENE = {'side': side, 't_end': t_end, 'V': p.V, 'shape': p.shape, 'size': p.size, 'mass': p.mass,
          'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 50, 'energy_limit': 0.99}
 if p.quick:
-    RES, DTS, REF_RES = [1, 2], [0.7], 2
+    RES, DTS, REF_RES = [1, 2, 4], [0.7], 4
     STIFF_KEEP = {'penalty': [1e6], 'section_springs': [1e4], 'yade_grid': [1e6, 1e7]}
 else:
     RES, DTS, REF_RES = [1, 2, 4], [0.35, 0.7], 4
