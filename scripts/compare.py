@@ -32,6 +32,7 @@ from woven.output import out_dir, write_summary
 p = read_params({
     'quick': (False, '', 'a reduced set of cases (a few minutes, for CI)'),
     'map': (True, '', 'also run the stability map'),
+    'map_size': ('', '', "'quick' or 'full' stability map (default: 'quick' with quick=1, else 'full')"),
     'jobs': (2, '', 'parallel runs for the stability map (timed runs always go one at a time)'),
     'V': (200.0, 'm/s', 'impact speed of the timed cases'),
     'side': (0.0, 'm', 'ply side (0: 25.4 mm, quick: 12.7 mm)'),
@@ -49,6 +50,8 @@ def bad(key, allowed):
     raise ValueError('%s = %r is invalid: allowed %s' % (key, p[key], allowed))
 
 
+if p.map_size not in ('', 'quick', 'full'):
+    bad('map_size', "'quick', 'full' or empty (follows quick)")
 if not (1 <= p.jobs <= 64):
     bad('jobs', '[1, 64]')
 if not (math.isfinite(p.V) and 0 < p.V <= 2000):
@@ -348,7 +351,7 @@ plt.close(fig)
 FAIL = ['stable', 'overlap', 'energy', 'tunnelling', 'refused', 'blow-up']
 map_rows = []
 if p.map:
-    if p.quick:
+    if (p.map_size or ('quick' if p.quick else 'full')) == 'quick':
         M_DT, M_V = [0.5, 1.5], [200.0, 1000.0]
         M_K = {'penalty': [1e6, 1e8], 'section_springs': [1e5], 'yade_grid': [1e6, 1e8]}
     else:
