@@ -343,12 +343,13 @@ plt.close(fig)
 # A small scene (6.35 mm ply, 1.5 mm sphere, 8 us) per method over dt/dt_crit x contact stiffness x
 # impact speed; each cell is classified by the first failure found (docs/compare.md):
 #   blow-up        non-finite state or energy blow-up (the scene's status 'unstable'), or no summary
+#   crash          the process was killed by a signal (a segmentation fault)
 #   refused        the time step was refused by a guard (woven: dt > dt_crit of the chain)
 #   energy         energy-balance error > 5 % of the projectile's kinetic energy
 #   overlap        a yarn-yarn or projectile-yarn overlap deeper than the yarn's thickness
 #   tunnelling     the projectile ended below the ply with no yarn broken and < 1 % of its speed lost
 #   stable         none of these
-FAIL = ['stable', 'overlap', 'energy', 'tunnelling', 'refused', 'blow-up']
+FAIL = ['stable', 'overlap', 'energy', 'tunnelling', 'refused', 'blow-up', 'crash']
 map_rows = []
 if p.map:
     if (p.map_size or ('quick' if p.quick else 'full')) == 'quick':
@@ -378,7 +379,11 @@ if p.map:
         s = r['summary']
         if s is None:
             refused = 'is invalid' in r['tail'] and ('safety' in r['tail'] or 'dt' in r['tail'])
-            return ('refused' if refused else 'blow-up'), r['tail'][-160:].replace('\n', ' ')
+            if refused:
+                return 'refused', r['tail'][-160:].replace('\n', ' ')
+            if r['code'] < 0 or r['code'] > 128:  # killed by a signal (YADE's grid code segfaults at 1000 m/s)
+                return 'crash', 'process ended by signal %d' % (-r['code'] if r['code'] < 0 else r['code'] - 128)
+            return 'blow-up', r['tail'][-160:].replace('\n', ' ')
         if s['status'] == 'unstable':
             return 'blow-up', 'instability detected'
         m = s['measured']
@@ -410,7 +415,7 @@ if p.map:
             f.write('%s,%g,%s,%g,%s,"%s"\n' % (r['method'], r['dt_over_dt_crit'], fmt(r['stiffness']), r['V'], r['result'],
                                                 r['why'].replace('"', "'")))
     from matplotlib.colors import ListedColormap
-    cmap = ListedColormap(['#4caf50', '#ffb300', '#fb8c00', '#8e24aa', '#9e9e9e', '#d32f2f'])
+    cmap = ListedColormap(['#4caf50', '#ffb300', '#fb8c00', '#8e24aa', '#9e9e9e', '#d32f2f', '#000000'])
     fig, axes = plt.subplots(len(METHODS), len(M_V), figsize=(4 * len(M_V), 2.3 * len(METHODS)), squeeze=False)
     for i, method in enumerate(METHODS):
         ks = M_K.get(method, [None]) if METHODS[method][1] else [None]
