@@ -268,8 +268,7 @@ def good(r):
     return r['status'] == 'ok' and math.isfinite(r.get('velocity_error', float('nan')))
 
 
-woven_runs = [r for r in rows if r['method'] != 'yade_grid' and good(r) and not r['reference']]
-impulse_runs = [r for r in woven_runs if r['method'] == 'impulse']
+impulse_runs = [r for r in rows if r['method'] == 'impulse' and good(r) and not r['reference']]
 grid_runs = [r for r in rows if r['method'] == 'yade_grid' and good(r)]
 
 

@@ -65,7 +65,7 @@ def test_no_flattening_leaves_sections_alone():
     for _ in range(60):
         e.step(1e-7)
     assert np.array_equal(woven.section_flattening(e), before)
-    assert e.collision_stats()['impulse_rows'] >= 0 and e.collision_stats()['max_penetration'] < 1e-6
+    assert e.collision_stats()['max_penetration'] < 1e-6
     assert np.all(woven.velocities(e)[:2, 2] <= 1e-9)  # the impulses stopped the approach (e = 0)
 
 
