@@ -107,7 +107,7 @@ bp::dict energyDict(FabricEngine& e) {
   bp::dict d;
   d["kinetic"] = b.kinetic, d["elastic"] = b.elastic, d["damped"] = b.damped, d["work"] = b.work;
   d["initial"] = b.initial, d["contact"] = b.contact, d["contact_input"] = b.contactInput;
-  d["released"] = b.released, d["body_work"] = b.bodyWork, d["spring"] = b.spring;
+  d["released"] = b.released, d["body_work"] = b.bodyWork, d["spring"] = b.spring, d["projection"] = b.projection;
   d["balance_error"] = b.balanceError();
   return d;
 }
@@ -155,8 +155,11 @@ void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real m
                         Real tolerance, int maxIterations, int flattenPasses, Real positionCorrection,
                         Real correctionSlop, Index selfExclude, const std::string& broad, Real skin, int threads,
                         bool yarnContacts, Real cacheDistance, const std::string& response, Real penaltyStiffness,
-                        Real penaltyDamping, const std::string& flattening, Real sectionStiffness) {
+                        Real penaltyDamping, const std::string& flattening, Real sectionStiffness,
+                        const std::string& model, int projectionSweeps, Real projectionSlop, Real projectionMaxMove) {
   ContactParams p;
+  p.model = contactModelByName(model), p.projectionSweeps = projectionSweeps, p.projectionSlop = projectionSlop;
+  p.projectionMaxMove = projectionMaxMove;
   p.restitution = restitution, p.friction = friction, p.mcd = mcd, p.rule = sectionRuleByName(rule);
   p.margin = margin, p.tolerance = tolerance, p.maxIterations = maxIterations, p.flattenPasses = flattenPasses;
   p.positionCorrection = positionCorrection, p.correctionSlop = correctionSlop, p.selfExclude = selfExclude;
@@ -179,6 +182,13 @@ bp::dict collisionStats(FabricEngine& e) {
   d["unresolved"] = s.impulses.unresolved, d["penetration"] = s.penetration, d["max_penetration"] = s.maxPenetration;
   d["max_unresolved"] = s.maxUnresolved, d["max_residual"] = s.maxResidual;
   d["correction_energy"] = s.correctionEnergy;
+  d["mean_penetration"] = s.meanPenetration, d["overlapping"] = s.overlapping;
+  d["deepest_pair"] = bp::make_tuple(s.deepestA, s.deepestB);
+  d["overlap_sum"] = s.overlapSum, d["overlap_count"] = s.overlapCount;
+  d["body_overlap_sum"] = s.bodyOverlapSum, d["body_overlap_count"] = s.bodyOverlapCount;
+  d["projection_sweeps"] = s.projection.sweeps, d["projection_pushed"] = s.projection.pushed;
+  d["projection_step_energy"] = s.projection.energy, d["projection_energy"] = s.projectionEnergy;
+  d["projection_overlap_left"] = s.projection.overlapLeft;
   d["force_rows"] = s.forces.rows, d["spring_energy"] = s.springEnergy, d["force_dissipated"] = s.forces.dissipated;
   d["seconds_refit"] = s.seconds[0], d["seconds_broad"] = s.seconds[1];
   d["seconds_narrow"] = s.seconds[2], d["seconds_respond"] = s.seconds[3];
@@ -298,10 +308,11 @@ bp::object candidatePairsPy(FabricEngine& e, const std::string& broad) {
   for (const CPPair& q : pairs) flat.push_back(q.a), flat.push_back(q.b);
   return bytesOf(flat);
 }
-bp::object contactsPy(FabricEngine& e) {  // cpA, cpB, gap [m], normal x y z per contact of the last step
+bp::object contactsPy(FabricEngine& e) {  // cpA, cpB, gap [m], normal x y z, sA, sB, kind per contact of the last step
   std::vector<Real> out;
   for (const CPContact& c : stageOf(e).contacts())
-    out.insert(out.end(), {Real(c.cpA), Real(c.cpB), c.gap, c.normal.x(), c.normal.y(), c.normal.z()});
+    out.insert(out.end(), {Real(c.cpA), Real(c.cpB), c.gap, c.normal.x(), c.normal.y(), c.normal.z(), c.sA, c.sB,
+                           Real(static_cast<int>(c.kind))});
   return bytesOf(out);
 }
 bp::object semiAxesPy(FabricEngine& e) {  // a, b per node [m] with the stage's section rule
@@ -503,7 +514,8 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("correction_slop") = 0.5e-6, bp::arg("self_exclude") = 1, bp::arg("broad_phase") = "tree",
             bp::arg("skin") = 5e-6, bp::arg("threads") = 0, bp::arg("yarn_contacts") = true, bp::arg("contact_cache") = 1e-7,
             bp::arg("response") = "impulse", bp::arg("penalty_stiffness") = 1e5, bp::arg("penalty_damping") = 0.0,
-            bp::arg("flattening") = "geometric", bp::arg("section_stiffness") = 1e4),
+            bp::arg("flattening") = "geometric", bp::arg("section_stiffness") = 1e4, bp::arg("contact_model") = "gap",
+            bp::arg("projection_sweeps") = -1, bp::arg("projection_slop") = 0.5e-6, bp::arg("projection_max_move") = 10e-6),
            "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction >= 0, mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
            "in [0, 1] per step, correction_slop [m], broad_phase 'tree', 'grid' or 'sap', skin [m] >= 0 (Verlet skin of "
@@ -511,7 +523,9 @@ BOOST_PYTHON_MODULE(_woven) {
            "contacts with rigid bodies), contact_cache [m] >= 0 (a contact is carried while its nodes move "
            "together to within this; 0: off), response 'impulse' or 'penalty', penalty_stiffness k_p [N/m] > 0, "
            "penalty_damping zeta in [0, 1), flattening 'geometric', 'none' or 'springs', section_stiffness k_s [N/m] > 0 "
-           "(docs/collisions.md). See woven.contact.")
+           "(docs/collisions.md), contact_model 'gap' (gap functions, exact gradient rows, position projection) or "
+           "'paper' (Sections 4-5), projection_sweeps in [0, 50] or -1 (auto: 8 with 'gap' and 'impulse', else 0), "
+           "projection_slop [m] in [0, 1e-3], projection_max_move [m] in (0, 1e-3]. See woven.contact.")
       .def("disable_collisions", +[](FabricEngine& e) { e.disableCollisions(); })
       .add_property("collisions_enabled", +[](FabricEngine& e) { return e.collisions() != nullptr; })
       .def("settle_sections", +[](FabricEngine& e, int passes) { return stageOf(e).settle(e.fabric(), passes); },

@@ -101,6 +101,7 @@ void ChainDynamics::start() {
   books_.contact = 0;
   books_.contactInput = 0;
   books_.released = 0;
+  books_.projection = 0;
   books_.spring = 0;
   springSeen_ = false;
   books_.bodyWork = 0;
@@ -303,6 +304,8 @@ void ChainDynamics::step(Real dt, StepHook* hook) {
     gravity ? drift<true>(dt, p) : drift<false>(dt, p);
     if (std::isfinite(ke)) bookContact(hook->afterDrift(f_, dt));
     // What the bodies gave is work on the fabric, not contact dissipation: move it across.
+    const Real pe = hook->takeProjectionEnergy();
+    books_.projection -= pe, books_.contactInput += std::max(Real(0), pe);
     const Real bw = hook->takeBodyWork();
     books_.work += bw, books_.bodyWork += bw, books_.contact += bw;
   }
@@ -341,7 +344,7 @@ void ChainDynamics::step(Real dt, StepHook* hook) {
       if (k > worstKe) worstKe = k, worst = i;
     }
     throw InstabilityError(step_, worst, -1,
-                           "energy blow-up: kinetic+elastic+damped+contact+spring = " +
+                           "energy blow-up: kinetic+elastic+damped+contact+spring+projection = " +
                                fmt(books_.total()) + " J exceeds " +
                                fmt(limits.blowupFactor) + " x (initial + |work| + contact input) / (1 - (dt/dt_crit)^2) = " + fmt(budget) +
                                " J (time step too large, or a load out of bounds)");

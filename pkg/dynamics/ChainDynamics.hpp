@@ -41,6 +41,9 @@ class StepHook {
   /// Work the hook's rigid bodies did on the fabric in the calls since the last take [J]: part of
   /// the energy the calls returned that is not the contacts' dissipation (the books take it as work).
   virtual Real takeBodyWork() { return 0; }
+  /// Spring energy the hook's position projection put in since the last take [J] (booked as
+  /// EnergyBooks::projection, not as contact dissipation).
+  virtual Real takeProjectionEnergy() { return 0; }
   /// Energy the hook's contact springs hold now, after beforeDrift [J] (EnergyBooks::spring); what
   /// they hold at its first call joins EnergyBooks::initial. Kept out of the energy beforeDrift returns, so that an unstable
   /// spring shows in the books' total (the blow-up check) instead of being booked away as contact input.

@@ -1,8 +1,9 @@
 // Energy books of the chain dynamics. All in joules. "work" is what the loads (kinematic nodes,
 // point forces, body force) and the rigid bodies' impulses put in; the balance
-// kinetic + elastic + damped + contact + spring + released = initial + work
-// holds to the integrator's O(dt^2) accuracy (plus the positional corrections of residual overlaps,
-// which no book takes: docs/collisions.md).
+// kinetic + elastic + damped + contact + spring + released + projection = initial + work
+// holds to the integrator's O(dt^2) accuracy (the position projection's moves are booked in
+// `projection`; the paper model's pre-drift corrections are booked in `contact` when made, but the
+// step drifts on forces of the uncorrected positions: docs/collisions.md).
 #pragma once
 #include "core/Types.hpp"
 
@@ -20,10 +21,13 @@ struct EnergyBooks {
   /// section springs 1/2 k_s (r0 eps)^2: docs/collisions.md); what they held at the first step is in initial [J].
   Real spring = 0;
   Real released = 0;    ///< elastic energy of broken elements, released at their break [J]
+  /// Energy taken out by the position projection of the contact model `gap` since the start [J]
+  /// (negative: the moves put spring energy in; law/PositionProjection).
+  Real projection = 0;
   Real initial = 0;     ///< kinetic + elastic at step 0 (+ the contact springs' energy then) [J]
 
-  Real total() const { return kinetic + elastic + damped + contact + spring + released; }
-  /// (kinetic + elastic + damped + contact + spring + released) - (initial + work) [J]
+  Real total() const { return kinetic + elastic + damped + contact + spring + released + projection; }
+  /// (kinetic + elastic + damped + contact + spring + released + projection) - (initial + work) [J]
   Real balanceError() const { return total() - initial - work; }
 };
 

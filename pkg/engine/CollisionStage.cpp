@@ -2,6 +2,7 @@
 #include "bound/CPBound.hpp"
 #include "core/Errors.hpp"
 #include "core/Parallel.hpp"
+#include "geom/GapFunction.hpp"
 #include "geom/SeparatingAxis.hpp"
 #include "law/SectionFlattening.hpp"
 #include <algorithm>
@@ -25,6 +26,25 @@ inline bool lockedCP(const Fabric& f, Index e, Real mcd) {
   return f.secFlat[f.elem0[e]] >= mcd && f.secFlat[f.elem0[e] + 1] >= mcd;
 }
 }  // namespace
+
+// What flattening can still take along a contact's normal (both CPs) [m]: the impulse rows' room
+// beyond the gap, and the overlap the position projection leaves to the next flattening passes.
+std::function<Real(const CPContact&)> CollisionStage::capacityOf(const Fabric& f) const {
+  return [this, &f](const CPContact& c) {
+    if (params_.flattening == Flattening::None || (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)))
+      return Real(0);
+    return capacityOne(f, c, false) + capacityOne(f, c, true);
+  };
+}
+
+// One side's flattening capacity along the contact: the paper's extent of the CP (model Paper), or
+// the support at the contact point (model Gap; B's side seen along -n).
+Real CollisionStage::capacityOne(const Fabric& f, const CPContact& c, bool sideB, const std::vector<Real>* flat) const {
+  const Index e = sideB ? c.cpB : c.cpA;
+  if (c.kind == ContactKind::Paper) return flatteningCapacity(f, tangent_, e, c.normal, params_, flat);
+  return flatteningCapacityAt(f, tangent_, e, sideB ? c.sB : c.sA, sideB ? Vec3(-c.hDir) : c.hDir,
+                              c.kind == ContactKind::Cross, params_, flat);
+}
 
 BroadPhase broadPhaseByName(const std::string& name) {
   if (name == "tree") return BroadPhase::YarnTree;
@@ -154,7 +174,9 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
   if (cachePairs_.size() != pairs_.size() || pairsChanged_) remapCache();
   pairsChanged_ = false;
   // Section springs reset every section each step (restoreSections): no contact outlives its sections.
-  const bool caching = params_.cacheDistance > 0 && params_.flattening != Flattening::Springs;
+  const bool caching = params_.cacheDistance > 0 && params_.flattening != Flattening::Springs &&
+                       params_.model == ContactModel::Paper;
+  const bool gapModel = params_.model == ContactModel::Gap;
   // Fixed chunks of the sorted pairs (threads take them in any order), concatenated in chunk order:
   // the same contacts in the same order for any thread count (each pair's cache entry is its own).
   constexpr Index kPairChunk = 512;
@@ -180,6 +202,20 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
       // pair neither touches nor meets within the step (a yes/no SAT with early out, cheaper than
       // the static test's depth and far cheaper than the moving test's four sweeps).
       if (!obbOverlap(grown_[pr.a], grown_[pr.b])) continue;
+      if (gapModel) {
+        // The pair's gap functions; listed when they can close within the step (speculative
+        // contacts: the row lets each close exactly its gap), bounded by the node speeds.
+        bool side = sideBySide(f, pr.a, pr.b, pc.memo && pc.side);
+        CPContact two[2];
+        const int m = pairGaps(f, pr.a, pr.b, side, params_.rule, pc.memo ? &pc.memoNormal : nullptr, two);
+        pc.memo = true, pc.side = side, pc.memoNormal = two[0].normal;
+        const Index i = f.elem0[pr.a], j = f.elem0[pr.b];
+        const Real reach = params_.margin + dt * (std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm())) +
+                                                  std::sqrt(std::max(f.vel[j].squaredNorm(), f.vel[j + 1].squaredNorm())));
+        for (int q = 0; q < m; ++q)
+          if (two[q].gap <= reach) out.push_back(two[q]);
+        continue;
+      }
       if (cpContactStatic(f, bounds_, pr.a, pr.b, params_.margin, params_.rule, c)) {
         out.push_back(c);
         if (caching) {
@@ -205,12 +241,17 @@ void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
   bodyContacts_.clear();
   if (bodies.empty()) return;
   bodyCollider.collide(f, grown_, grow_, bodies, dt, bodyPairs_);
-  BodyContact c;
-  for (const BodyCandidate& pc : bodyPairs_)
-    if (cpBodyContact(f, bounds_[pc.cp], pc.cp, bodies[pc.body], pc.part, dt, params_.margin, params_.rule, c)) {
-      c.body = pc.body;
-      bodyContacts_.push_back(c);
+  BodyContact c[2];
+  const bool gapModel = params_.model == ContactModel::Gap;
+  for (const BodyCandidate& pc : bodyPairs_) {
+    const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin, params_.rule, c)
+                           : cpBodyContact(f, bounds_[pc.cp], pc.cp, bodies[pc.body], pc.part, dt, params_.margin,
+                                           params_.rule, c[0]);
+    for (int q = 0; q < m; ++q) {
+      c[q].body = pc.body;
+      bodyContacts_.push_back(c[q]);
     }
+  }
 }
 
 // Paper Sec. 5.1 steps 1-3: take up each overlap by flattening the sections of both CPs (half each,
@@ -234,8 +275,8 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
       const CPContact& c = contacts_[k];
       if (c.time > 0 || !(c.gap < -tiny)) return;
       if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) return;  // the loop below skips it
-      capacity_[2 * k] = flatteningCapacity(f, tangent_, c.cpA, c.normal, params_, &flatBefore_);
-      capacity_[2 * k + 1] = flatteningCapacity(f, tangent_, c.cpB, c.normal, params_, &flatBefore_);
+      capacity_[2 * k] = capacityOne(f, c, false, &flatBefore_);
+      capacity_[2 * k + 1] = capacityOne(f, c, true, &flatBefore_);
     });
     for (Index k = 0; k < nc; ++k) {
       const CPContact& c = contacts_[k];
@@ -246,16 +287,20 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
         const Index i = f.elem0[e];
         return (flatBefore_[i] == 0 && f.secFlat[i] != 0) || (flatBefore_[i + 1] == 0 && f.secFlat[i + 1] != 0);
       };
-      const Real capA = turnedThisPass(c.cpA) ? flatteningCapacity(f, tangent_, c.cpA, c.normal, params_, &flatBefore_)
-                                              : capacity_[2 * k];
-      const Real capB = turnedThisPass(c.cpB) ? flatteningCapacity(f, tangent_, c.cpB, c.normal, params_, &flatBefore_)
-                                              : capacity_[2 * k + 1];
+      const Real capA = turnedThisPass(c.cpA) ? capacityOne(f, c, false, &flatBefore_) : capacity_[2 * k];
+      const Real capB = turnedThisPass(c.cpB) ? capacityOne(f, c, true, &flatBefore_) : capacity_[2 * k + 1];
       if (capA + capB <= tiny) continue;  // locked: left to the impulses
       Real dA = std::min(capA, 0.5 * need);
       const Real dB = std::min(capB, need - dA);
       dA = std::min(capA, need - dB);
-      flattenCP(f, tangent_, c.cpA, c.normal, dA, params_, flatBefore_, dirSum_);
-      flattenCP(f, tangent_, c.cpB, c.normal, dB, params_, flatBefore_, dirSum_);
+      if (c.kind == ContactKind::Paper) {
+        flattenCP(f, tangent_, c.cpA, c.normal, dA, params_, flatBefore_, dirSum_);
+        flattenCP(f, tangent_, c.cpB, c.normal, dB, params_, flatBefore_, dirSum_);
+      } else {  // the gap model measures at the contact point: flatten there
+        const bool thickness = c.kind == ContactKind::Cross;
+        flattenAt(f, tangent_, c.cpA, c.sA, c.hDir, thickness, dA, params_, flatBefore_, dirSum_);
+        flattenAt(f, tangent_, c.cpB, c.sB, Vec3(-c.hDir), thickness, dB, params_, flatBefore_, dirSum_);
+      }
       for (Index e : {c.cpA, c.cpB})
         for (Index q = std::max(e - 1, 0); q <= std::min(e + 1, f.nElems() - 1); ++q)
           if (f.elemYarn[q] == f.elemYarn[e]) dirty_[q] = 1;
@@ -274,6 +319,7 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
     parallelFor(nc, 256, threads(), [&](Index k) {  // each contact on its own
       CPContact& c = contacts_[k];
       if (c.time > 0 || !(dirty_[c.cpA] || dirty_[c.cpB])) return;
+      if (c.kind != ContactKind::Paper) return remeasure(f, c, params_.rule, true);  // same points, new sections
       CPContact again;
       if (cpContactStatic(f, bounds_, c.cpA, c.cpB, params_.margin, params_.rule, again)) c = again;
       else c.gap = 2 * params_.margin;  // apart now: at least this far
@@ -360,20 +406,24 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   for (const CPContact& c : contacts_) stats.moving += c.time > 0;
   stats.flattened = 0;
   stats.flattenPasses = flattens ? flatten(f, params_.flattenPasses) : 0;
+  // Overlap after flattening (what neither flattening took nor the last projection removed): its
+  // largest and mean values over the contacts in overlap, and sums for the mean over time.
   stats.penetration = 0;
-  for (const CPContact& c : contacts_) stats.penetration = std::max(stats.penetration, -c.gap);
+  Real sum = 0;
+  long count = 0;
+  stats.deepestA = stats.deepestB = -1;
+  for (const CPContact& c : contacts_) {
+    if (-c.gap > stats.penetration) stats.penetration = -c.gap, stats.deepestA = c.cpA, stats.deepestB = c.cpB;
+    if (c.gap < 0) sum -= c.gap, ++count;
+  }
+  stats.meanPenetration = count > 0 ? sum / count : 0.0;
+  stats.overlapping = count;
+  stats.overlapSum += sum, stats.overlapCount += count;
   stats.impulses = ImpulseReport{};
   stats.correctionEnergy = 0;
   Real added = 0;
   if (!penalty) {
-    law_.resolve(
-        f, contacts_,
-        [&](const CPContact& c) {
-          if (!flattens || (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd))) return Real(0);
-          return flatteningCapacity(f, tangent_, c.cpA, c.normal, params_) +
-                 flatteningCapacity(f, tangent_, c.cpB, c.normal, params_);
-        },
-        dt, params_, stats.impulses, bodyContacts_, &bodies);
+    law_.resolve(f, contacts_, capacityOf(f), dt, params_, stats.impulses, bodyContacts_, &bodies);
     bodyWork_ += stats.impulses.bodyWork;
     added += stats.impulses.energyChange;
   }
@@ -401,9 +451,13 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   spring_ = spring + stats.forces.halfDrift;
   stats.bodyContacts = static_cast<long>(bodyContacts_.size());
   stats.bodyPenetration = 0;
-  for (const BodyContact& c : bodyContacts_) stats.bodyPenetration = std::max(stats.bodyPenetration, -c.gap);
+  for (const BodyContact& c : bodyContacts_) {
+    stats.bodyPenetration = std::max(stats.bodyPenetration, -c.gap);
+    if (c.gap < 0) stats.bodyOverlapSum -= c.gap, ++stats.bodyOverlapCount;
+  }
   stats.maxBodyPenetration = std::max(stats.maxBodyPenetration, stats.bodyPenetration);
-  if (!penalty) stats.correctionEnergy = ImpulseLaw::correctPositions(f, contacts_, params_);
+  if (!penalty && params_.model == ContactModel::Paper)
+    stats.correctionEnergy = ImpulseLaw::correctPositions(f, contacts_, params_);
   stats.seconds[3] += since(t);
 
   ++stats.steps;
@@ -423,6 +477,13 @@ Real CollisionStage::afterDrift(Fabric& f, Real dt) {
   if (params_.response == Response::Penalty) return 0;
   const Real dE = law_.restitute(f, params_, &bodies, &bodyWork_);
   stats.impulses.energyChange += dE;
+  stats.projection = ProjectionReport{};
+  if (const int sweeps = params_.projectionSweepCount(); sweeps > 0) {
+    projector_.project(f, contacts_, bodyContacts_, bodies, capacityOf(f), sweeps, params_.projectionSlop,
+                       params_.projectionMaxMove, params_.rule, stats.projection);
+    projectionEnergy_ += stats.projection.energy;
+    stats.projectionEnergy += stats.projection.energy;
+  }
   return dE;
 }
 
@@ -447,11 +508,15 @@ Real CollisionStage::bodyOverlap(Fabric& f, int k) {
   refit(f, 0);
   const RigidBody& b = bodies.at(k);
   Real worst = -INFINITY;
-  BodyContact c;
+  BodyContact c[2];
   for (std::size_t part = 0; part < b.parts.size(); ++part)
-    for (Index e = 0; e < f.nElems(); ++e)
-      if (f.alive[e] && cpBodyContact(f, bounds_[e], e, b, static_cast<int>(part), 0, params_.margin, params_.rule, c))
-        worst = std::max(worst, -c.gap);
+    for (Index e = 0; e < f.nElems(); ++e) {
+      if (!f.alive[e]) continue;
+      const int m = params_.model == ContactModel::Gap
+                        ? bodyGap(f, e, b, static_cast<int>(part), 0, params_.margin, params_.rule, c)
+                        : cpBodyContact(f, bounds_[e], e, b, static_cast<int>(part), 0, params_.margin, params_.rule, c[0]);
+      for (int q = 0; q < m; ++q) worst = std::max(worst, -c[q].gap);
+    }
   return worst;
 }
 

@@ -18,7 +18,9 @@
 #include "dynamics/ChainDynamics.hpp"
 #include "geom/CPContact.hpp"
 #include "law/ImpulseLaw.hpp"
+#include "law/PositionProjection.hpp"
 #include "law/NormalForces.hpp"
+#include <functional>
 #include <string>
 
 namespace woven {
@@ -39,7 +41,11 @@ struct CollisionStats {
   NormalForceReport forces;   ///< the penalty / section-spring forces (response penalty, flattening springs)
   Real springEnergy = 0;      ///< energy held in those springs at x_n [J] (1/2 k_p delta^2 + 1/2 k_s (r0 eps)^2)
   Real penetration = 0;       ///< largest overlap left after flattening, before correction [m]
-  Real correctionEnergy = 0;  ///< spring energy the positional correction put in [J]
+  Real correctionEnergy = 0;  ///< spring energy the positional correction put in [J] (model Paper)
+  ProjectionReport projection;  ///< the position projection after the drift (model Gap)
+  Real meanPenetration = 0;   ///< mean overlap of the contacts overlapping after flattening [m]
+  Index deepestA = -1, deepestB = -1;  ///< the CPs of the deepest of them (-1: none)
+  long overlapping = 0;       ///< contacts overlapping after flattening
   long bodyContacts = 0;      ///< CP-body contacts (static + moving)
   Real bodyPenetration = 0;   ///< largest CP-body overlap at the start of the step [m]
   // since the start
@@ -47,6 +53,13 @@ struct CollisionStats {
   long broadPhases = 0;       ///< broad phases run (the other steps reused the pairs: Verlet skin)
   long partialBroadPhases = 0;  ///< of which only for the yarns that left their skin (OBB tree)
   Real maxPenetration = 0;    ///< [m]
+  /// Sums over the steps of the overlaps of the contacts overlapping after flattening and of their
+  /// count [m, -], for the mean over contacts and time (yarn-yarn; bodies below).
+  Real overlapSum = 0;
+  long overlapCount = 0;
+  Real bodyOverlapSum = 0;
+  long bodyOverlapCount = 0;
+  Real projectionEnergy = 0;  ///< spring energy the position projection put in since the start [J]
   Real maxBodyPenetration = 0;  ///< [m]
   long maxUnresolved = 0;     ///< most unresolved impulse rows in one step
   Real maxResidual = 0;       ///< [m/s]
@@ -71,6 +84,11 @@ class CollisionStage : public StepHook {
   /// Spring energy of the penalty contacts and section springs half way through the step's drift
   /// (law/NormalForces: the pair of the synchronised kinetic energy) [J].
   Real springEnergy() const override { return spring_; }
+  Real takeProjectionEnergy() override {
+    const Real e = projectionEnergy_;
+    projectionEnergy_ = 0;
+    return e;
+  }
   Real takeBodyWork() override {
     const Real w = bodyWork_;
     bodyWork_ = 0;
@@ -117,6 +135,10 @@ class CollisionStage : public StepHook {
   void broad(const Fabric& f);
   void narrow(const Fabric& f, Real dt);
   struct PairCache {
+    // The pair's memory (model Gap; kept while the broad phase keeps the pair, forgotten with the
+    // cache): its kind (Side / Cross hysteresis) and the side its normal points to.
+    bool memo = false, side = false;
+    Vec3 memoNormal = Vec3::Zero();
     bool valid = false;
     long clock = 0;     // narrow phase that measured it
     CPContact contact;
@@ -126,6 +148,8 @@ class CollisionStage : public StepHook {
   void remapCache();
   void narrowBodies(const Fabric& f, Real dt);
   int flatten(Fabric& f, int maxPasses);
+  std::function<Real(const CPContact&)> capacityOf(const Fabric& f) const;
+  Real capacityOne(const Fabric& f, const CPContact& c, bool sideB, const std::vector<Real>* flat = nullptr) const;
   void restoreSections(Fabric& f);
   Real addSectionSprings(const Fabric& f);
 
@@ -150,6 +174,8 @@ class CollisionStage : public StepHook {
   long cacheClock_ = 0;
   bool pairsChanged_ = false;
   ImpulseLaw law_;
+  PositionProjection projector_;
+  Real projectionEnergy_ = 0;
   NormalForces forces_;
   Real spring_ = 0;
   std::vector<Real> restFlat_, nodeWeight_;  // flattening Springs: each node's eps at the first step

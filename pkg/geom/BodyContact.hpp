@@ -29,6 +29,14 @@ struct BodyContact {
   Vec3 point = Vec3::Zero();   ///< contact point [m]
   Real s = 0.5;                ///< where the point lies along the CP (weight of its 2nd node)
   Real time = 0;               ///< first time of contact within the step [s] (0: touching at the start)
+  /// Gap model (geom/GapFunction.hpp): the form used, and what it holds for the step. Sphere: the
+  /// section frame at s (u, d, semi-axes a, b). Box: the normal in the body frame (it turns with
+  /// the body) and the two end sections' supports along it.
+  bool gapModel = false;
+  Vec3 secU = Vec3::Zero(), secD = Vec3::Zero();
+  Real secA = 0, secB = 0;
+  Vec3 localNormal = Vec3::Zero();
+  Real support[2] = {0, 0};
 };
 
 /// Contact of CP `cp` (box `cpBox`, the bound functor's OBB) with part `part` of `body` within the

@@ -23,6 +23,10 @@ enum class SectionLine : std::uint8_t {
 /// interpolated linearly; within a tenth of the CP beyond an end, the end section).
 SectionLine sectionSurfaceAlong(const Fabric& f, Index e, const Vec3& p, const Vec3& m, SectionRule rule, Real& lambda);
 
+/// Which gap function measured a contact (geom/GapFunction.hpp): the paper's box normal with the
+/// depth on the sections (contact model `paper`), or the gap model's crossing / side-by-side forms.
+enum class ContactKind : std::uint8_t { Paper = 0, Cross = 1, Side = 2 };
+
 struct CPContact {
   Index cpA = -1, cpB = -1;      ///< CPs, cpA < cpB
   Vec3 normal = Vec3::UnitZ();   ///< unit, from A towards B
@@ -36,6 +40,9 @@ struct CPContact {
   Vec3 point = Vec3::Zero();     ///< contact point [m]: between the CP axes' closest points (static), clipped centroid (moving)
   Real sA = 0.5, sB = 0.5;       ///< where the point lies along each CP, in [0, 1] (weight of its 2nd node)
   Real time = 0;                 ///< first time of contact within the step [s] (0: touching at the start)
+  ContactKind kind = ContactKind::Paper;
+  Real hA = 0, hB = 0;           ///< gap model: the sections' supports at the point, held for the step [m]
+  Vec3 hDir = Vec3::UnitZ();     ///< gap model: the direction they are measured (and flattened) along (GapFunction.hpp)
 };
 
 /// Static contact of CPs a < b: true (and `out`) when their boxes overlap. The boxes give the normal

@@ -4,6 +4,13 @@
 
 namespace woven {
 
+ContactModel contactModelByName(const std::string& name) {
+  if (name == "gap") return ContactModel::Gap;
+  if (name == "paper") return ContactModel::Paper;
+  throw ParameterError("contact_model", "'" + name + "'",
+                       "'gap' (gap functions, exact gradient rows, position projection) or 'paper' (Sections 4-5)");
+}
+
 Response responseByName(const std::string& name) {
   if (name == "impulse") return Response::Impulse;
   if (name == "penalty") return Response::Penalty;
@@ -38,6 +45,15 @@ void ContactParams::validate() const {
   require(std::isfinite(sectionStiffness) && sectionStiffness > 0, "section_stiffness", sectionStiffness, "(0, inf) N/m");
   require(static_cast<int>(response) <= 1, "response", static_cast<int>(response), "'impulse' or 'penalty'");
   require(static_cast<int>(flattening) <= 2, "flattening", static_cast<int>(flattening), "'geometric', 'none' or 'springs'");
+  require(static_cast<int>(model) <= 1, "contact_model", static_cast<int>(model), "'gap' or 'paper'");
+  require(projectionSweeps >= -1 && projectionSweeps <= 50, "projection_sweeps", projectionSweeps, "[0, 50], or -1 (auto)");
+  require(!(projectionSweeps > 0 && (model != ContactModel::Gap || response != Response::Impulse)), "projection_sweeps",
+          projectionSweeps, "0 or -1 (auto) with contact_model 'paper' or response 'penalty'; [1, 50] only with "
+          "contact_model 'gap' and response 'impulse'");
+  require(std::isfinite(projectionSlop) && projectionSlop >= 0 && projectionSlop <= 1e-3, "projection_slop", projectionSlop,
+          "[0, 1e-3] m");
+  require(std::isfinite(projectionMaxMove) && projectionMaxMove > 0 && projectionMaxMove <= 1e-3, "projection_max_move",
+          projectionMaxMove, "(0, 1e-3] m");
   require(selfExclude >= 1, "self_exclude", selfExclude, "[1, inf) elements (1: CPs sharing a node)");
 }
 

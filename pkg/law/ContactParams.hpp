@@ -18,12 +18,38 @@ enum class Flattening : std::uint8_t {
   None = 1,       ///< sections never change during the steps (settle() still shapes a built weave)
   Springs = 2     ///< flatten as Geometric, and each flattened node section pushes back with k_s r0 eps (Eq. 7)
 };
+/// Which gap function the contacts are measured, solved and projected on (docs/collisions.md).
+enum class ContactModel : std::uint8_t {
+  /// One gap function per contact kind, each impulse row its exact gradient, and a position
+  /// projection after the drift on the same functions (geom/GapFunction.hpp; the default).
+  Gap = 0,
+  /// The paper's (Sections 4-5): the separating-axis translation distance as the normal, the depth
+  /// on the sections along it, moving SAT for first contacts, pre-drift positional correction.
+  Paper = 1
+};
+/// "gap" or "paper"; throws ParameterError("contact_model") otherwise.
+ContactModel contactModelByName(const std::string& name);
 /// "impulse" or "penalty"; throws ParameterError("response") otherwise.
 Response responseByName(const std::string& name);
 /// "geometric", "none" or "springs"; throws ParameterError("flattening") otherwise.
 Flattening flatteningByName(const std::string& name);
 
 struct ContactParams {
+  ContactModel model = ContactModel::Gap;
+  /// Sweeps of the position projection after the drift (model Gap, response Impulse), in [0, 50];
+  /// -1 (auto): 8 there (it stops early once nothing moves), 0 elsewhere. A count >= 1 with model Paper or response Penalty is refused
+  /// (those keep their own overlap handling).
+  int projectionSweeps = -1;
+  /// Overlap the projection leaves alone [m] >= 0 (Box2D's linear slop).
+  Real projectionSlop = 0.5e-6;
+  /// Most of a contact's overlap one projection move closes [m] > 0 (Box2D's maxLinearCorrection).
+  /// 10 um, a tenth of a KM2 yarn's thickness: 150 m/s over the ballistic scene's step.
+  Real projectionMaxMove = 10e-6;
+  /// The sweeps the projection makes with these parameters.
+  int projectionSweepCount() const {
+    if (projectionSweeps >= 0) return projectionSweeps;
+    return model == ContactModel::Gap && response == Response::Impulse ? 8 : 0;
+  }
   Real restitution = 0.0;     ///< e of Eq. 5 in [0, 1]; 0: "at the next time moment both nodes move together"
   Real friction = 0.0;        ///< Coulomb coefficient mu >= 0 (0 as in the paper)
   Real mcd = 0.6;             ///< maximum cross-sectional deformation in (0, 1) (paper: 0.5-0.7)
@@ -36,7 +62,7 @@ struct ContactParams {
   Real tolerance = 1e-6;      ///< Eq. 4 resting band and solver tolerance on normal velocity [m/s] > 0
   int maxIterations = 50;     ///< bound on the impulse iterations per step, >= 1
   int flattenPasses = 4;      ///< re-tests of flattened contacts per step (paper's "go to steps 1 and 2"), >= 1
-  /// Fraction in [0, 1] of a residual (locked) overlap removed per step by moving the nodes apart
+  /// Model Paper: fraction in [0, 1] of a residual (locked) overlap removed per step by moving the nodes apart
   /// (weighted like an impulse, each node across its own CP; its spring energy is booked;
   /// docs/collisions.md). Box2D's 0.2: a whole overlap removed in one step kicks the springs.
   Real positionCorrection = 0.2;

@@ -1,5 +1,6 @@
 #include "law/ImpulseLaw.hpp"
 #include "core/Parallel.hpp"
+#include "fabric/SpringEnergy.hpp"
 #include <algorithm>
 #include <cmath>
 
@@ -71,6 +72,10 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   // nothing the rows change); then the rows in contact order.
   const Index nc = static_cast<Index>(contacts.size());
   allowed_.resize(contacts.size());
+  // Model Gap: a row for every listed contact (the multiplier's sign decides); one that does not
+  // approach beyond its gap at the start gets the gap as its room (its flattening capacity is not
+  // measured: the row then stops it at the gap if other rows push it on).
+  const bool everyContact = p.model == ContactModel::Gap;
   parallelFor(nc, 256, threads(), [&](Index c) {
     Index node[4];
     Real w[4];
@@ -79,10 +84,10 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     // Approach the room absorbs: the gap, and what flattening can still take, unless the contact is
     // still overlapping after the flattening passes (flattening has stopped working for it).
     const Real gap = contacts[c].gap;
-    allowed_[c] = NAN;
+    allowed_[c] = everyContact ? std::max(gap, Real(0)) / dt : NAN;
     if (!(vn0 < -std::max(gap, Real(0)) / dt - p.tolerance)) return;  // separating, resting (Eq. 4), or within the gap
     const Real allowed = (gap < 0 ? 0.0 : gap + capacity(contacts[c])) / dt;
-    if (!(vn0 < -allowed - p.tolerance)) return;  // taken up by flattening
+    if (!everyContact && !(vn0 < -allowed - p.tolerance)) return;  // taken up by flattening
     allowed_[c] = allowed;
   });
   for (Index c = 0; c < nc; ++c) {
@@ -108,7 +113,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     r.arm = c.point - (*bodies)[c.body].pos;
     r.vn0 = rowVelocity(f, r).dot(r.n);
     const Real allowed = std::max(c.gap, Real(0)) / dt;
-    if (!(r.vn0 < -allowed - p.tolerance)) continue;
+    if (!everyContact && !(r.vn0 < -allowed - p.tolerance)) continue;
     const BodyVelocity& b = bodyVel_[c.body];
     const Vec3 rn = r.arm.cross(r.n);
     Real K = b.invM + rn.dot(b.invI * rn);
@@ -210,15 +215,6 @@ Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p, std::vector<RigidB
   if (bodyWork) *bodyWork += work;
   return energyChange(f);
 }
-
-namespace {
-// Spring energy 1/2 K (l - l0)^2 of CP e (0 while slack for tension-only yarns) [J].
-Real springEnergy(const Fabric& f, Index e) {
-  const Real stretch = (f.pos[f.elem0[e] + 1] - f.pos[f.elem0[e]]).norm() - f.restLength[e];
-  if (stretch < 0 && f.materials[f.yarns[f.elemYarn[e]].material].tensionOnly) return 0;
-  return 0.5 * f.stiffness[e] * stretch * stretch;
-}
-}  // namespace
 
 Real ImpulseLaw::correctPositions(Fabric& f, const std::vector<CPContact>& contacts, const ContactParams& p) {
   if (p.positionCorrection == 0) return 0;

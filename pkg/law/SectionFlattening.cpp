@@ -73,6 +73,52 @@ void flattenCP(Fabric& f, const Vec3Array& tangent, Index e, const Vec3& n, Real
   }
 }
 
+namespace {
+// What node k's section can still lose at a gap-model contact [m]: its support along n down to the
+// MCD, or (thickness) its half-thickness b = r0 (1 - eps) down to r0 (1 - MCD).
+Real nodeCapacity(const Fabric& f, const Vec3Array& tangent, Index k, const Vec3& n, bool thickness, Real eps,
+                  const ContactParams& p) {
+  if (thickness) return f.secRadius[k] * std::max(Real(0), p.mcd - eps);
+  const NodeReach r = reach(f, tangent, k, f.pos[k], n, eps, p);
+  return r.now - r.min;
+}
+}  // namespace
+
+Real flatteningCapacityAt(const Fabric& f, const Vec3Array& tangent, Index e, Real s, const Vec3& n, bool thickness,
+                          const ContactParams& p, const std::vector<Real>* flat) {
+  const std::vector<Real>& eps = flat ? *flat : f.secFlat;
+  const Index i = f.elem0[e];
+  return (1 - s) * nodeCapacity(f, tangent, i, n, thickness, eps[i], p) +
+         s * nodeCapacity(f, tangent, i + 1, n, thickness, eps[i + 1], p);
+}
+
+void flattenAt(Fabric& f, const Vec3Array& tangent, Index e, Real s, const Vec3& n, bool thickness, Real delta,
+               const ContactParams& p, const std::vector<Real>& flatBefore, Vec3Array& dirSum) {
+  if (!(delta > 0)) return;
+  const Index i = f.elem0[e];
+  const Real cap[2] = {nodeCapacity(f, tangent, i, n, thickness, flatBefore[i], p),
+                       nodeCapacity(f, tangent, i + 1, n, thickness, flatBefore[i + 1], p)};
+  const Real total = (1 - s) * cap[0] + s * cap[1];
+  if (!(total > 0)) return;
+  for (int q = 0; q < 2; ++q) {
+    const Index k = i + q;
+    if (cap[q] <= 0) continue;
+    Vec3 dir;
+    Real c = flatteningDirection(f, tangent, k, n, dir);
+    if (thickness) {  // b shrinks whatever the normal; a circular section still turns to face it
+      if (c == 0) dir = f.secDir[k];
+      c = 1;
+    }
+    if (c == 0) continue;
+    // Each node gives the same share of what it has left: the section at s loses exactly delta
+    // (<= total), and no node is asked for more than its capacity.
+    const Real loss = std::min(Real(1), delta / total) * cap[q];
+    const Real ask = loss / (c * f.secRadius[k]);
+    dirSum[k] += (dir.dot(f.secDir[k]) < 0 ? -ask : ask) * dir;
+    f.secFlat[k] = std::min(p.mcd, std::max(f.secFlat[k], flatBefore[k] + ask));
+  }
+}
+
 void turnSections(Fabric& f, const Vec3Array& tangent, const std::vector<Real>& flatBefore, Vec3Array& dirSum) {
   for (Index k = 0; k < f.nNodes(); ++k) {
     if (dirSum[k].squaredNorm() == 0) continue;

@@ -31,6 +31,18 @@ Real flatteningCapacity(const Fabric& f, const Vec3Array& tangent, Index e, cons
 void flattenCP(Fabric& f, const Vec3Array& tangent, Index e, const Vec3& n, Real delta, const ContactParams& p,
                const std::vector<Real>& flatBefore, Vec3Array& dirSum);
 
+/// Contact model `gap` (geom/GapFunction.hpp): the gap is measured at the point s along CP e, so
+/// the flattening is too. What the section at s can still lose before the MCD locks the end
+/// sections [m]: (1 - s) and s times the two nodes' capacities, each the loss of its support along
+/// n or, with `thickness` (crossing contacts, which measure the half-thickness b), of b itself.
+Real flatteningCapacityAt(const Fabric& f, const Vec3Array& tangent, Index e, Real s, const Vec3& n, bool thickness,
+                          const ContactParams& p, const std::vector<Real>* flat = nullptr);
+/// Flattens the end sections of CP e so that the section at s loses delta [m] (as measured by
+/// flatteningCapacityAt): each node gives the fraction delta / capacity of what it has left,
+/// measured with `flatBefore`; the minor axes turn towards n through dirSum as in flattenCP.
+void flattenAt(Fabric& f, const Vec3Array& tangent, Index e, Real s, const Vec3& n, bool thickness, Real delta,
+               const ContactParams& p, const std::vector<Real>& flatBefore, Vec3Array& dirSum);
+
 /// After a pass of flattenCP: each touched node's minor axis becomes the mean of its old axis
 /// (weighted by its eps before the pass) and the directions its contacts flattened it along
 /// (weighted by the deformation each asked for), made normal to the yarn. A node pressed by several

@@ -43,8 +43,9 @@ def section_semi_axes(engine):
 
 
 def contacts(engine):
-    """Contacts of the last step: columns cpA, cpB, gap [m] (< 0: overlap), normal x, y, z; shape (n, 6)."""
-    return np.frombuffer(engine._contacts(), dtype=np.float64).reshape(-1, 6)
+    """Contacts of the last step: columns cpA, cpB, gap [m] (< 0: overlap), normal x, y, z, sA, sB (the
+    contact point along each CP), kind (0 paper, 1 crossing, 2 side by side); shape (n, 9)."""
+    return np.frombuffer(engine._contacts(), dtype=np.float64).reshape(-1, 9)
 
 
 def candidate_pairs(engine, broad_phase='tree'):

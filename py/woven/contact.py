@@ -15,8 +15,8 @@ CONTACT_KEYS = {
     'tolerance': (1e-6, 'm/s', 'Eq. 4 resting band and impulse solver tolerance'),
     'max_iterations': (50, '', 'impulse sweeps per step at most'),
     'flatten_passes': (4, '', 'flattening re-tests per step'),
-    'position_correction': (0.2, '', 'fraction of a locked overlap removed per step, in [0, 1]'),
-    'correction_slop': (0.5e-6, 'm', 'overlap the positional correction leaves alone'),
+    'position_correction': (0.2, '', 'contact_model=paper: fraction of a locked overlap removed per step before the drift, in [0, 1]'),
+    'correction_slop': (0.5e-6, 'm', 'contact_model=paper: overlap the positional correction leaves alone'),
     'self_exclude': (1, '', 'CPs of one yarn this many elements apart never collide (raised to the section size)'),
     'broad_phase': ('tree', '', "'tree' (OBB tree per yarn), 'grid' (uniform grid of cells) or 'sap' (sweep and prune)"),
     'skin': (5e-6, 'm', 'Verlet skin: candidate pairs are kept while every CP box stays inside its box grown by this'),
@@ -27,6 +27,12 @@ CONTACT_KEYS = {
     'penalty_damping': (0.0, '', 'penalty damping ratio zeta in [0, 1): c = 2 zeta sqrt(k_p m_eff)'),
     'flattening': ('geometric', '', "'geometric' (free up to the MCD, the paper), 'none' (sections fixed) or 'springs' (Eq. 7 section springs)"),
     'section_stiffness': (1e4, 'N/m', 'section spring k_s > 0 (flattening=springs): a node flattened by r0*eps pushes back k_s*r0*eps'),
+    'contact_model': ('gap', '', "'gap' (one gap function per contact kind, impulse rows its exact gradient, position projection "
+                      "after the drift; the default) or 'paper' (the paper's SAT normal and depth, Sections 4-5; docs/collisions.md)"),
+    'projection_sweeps': (-1, '', 'sweeps of the position projection after the drift (it stops once nothing moves), [0, 50]; -1: auto (8 with contact_model=gap '
+                          'and response=impulse, else 0); >= 1 is refused with contact_model=paper or response=penalty'),
+    'projection_slop': (0.5e-6, 'm', 'overlap the position projection leaves alone, in [0, 1e-3]'),
+    'projection_max_move': (10e-6, 'm', 'most of a contact\'s overlap one projection move closes, in (0, 1e-3] (deep overlaps go out over a few steps)'),
     'yarn_contacts': (True, '', 'contacts between yarns (False: only with rigid bodies; yarns pass through each other)'),
 }
 
@@ -43,7 +49,7 @@ def enable(engine, **kw):
     if bad:
         raise ValueError('unknown contact key(s) %s: allowed %s' % (', '.join(bad), ', '.join(sorted(CONTACT_KEYS))))
     args = {k: kw.get(k, v[0]) for k, v in CONTACT_KEYS.items()}
-    for k in ('max_iterations', 'flatten_passes', 'self_exclude', 'threads'):
+    for k in ('max_iterations', 'flatten_passes', 'self_exclude', 'threads', 'projection_sweeps'):
         args[k] = int(args[k])
     args['yarn_contacts'] = bool(int(args['yarn_contacts'])) if not isinstance(args['yarn_contacts'], bool) else args['yarn_contacts']
     engine.enable_collisions(**args)

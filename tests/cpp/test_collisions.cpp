@@ -294,6 +294,7 @@ TEST(MovingContact, NoTunnellingAt1000MetresPerSecond) {
           if (fixedTarget || i == 0 || i == 6) eng.dynamics().fix(i);
         ContactParams p;
         p.restitution = e;
+        p.projectionSlop = 1e-9;  // an absolute length: this yarn is 10 um thick
         eng.enableCollisions(p);
         const Real dt = eng.criticalDt();
         Real minGap = INFINITY;
@@ -378,10 +379,14 @@ TEST(NonPenetration, RandomDropsAndPressesOntoALayer) {
   }
 }
 
+// Both contact models: the paper's carried contacts and the gap model's pair memory (side-by-side
+// kind, normal side) are forgotten at a save and a load alike.
 TEST(StateIO, SectionsAndClockRoundTripAndTheRunContinuesBitForBit) {
+ for (ContactModel model : {ContactModel::Paper, ContactModel::Gap}) {
   WeaveParams p = km2_706();
   p.nx = p.ny = 2;
   ContactParams cp;
+  cp.model = model;
   cp.cacheDistance = 1e-6;  // carried contacts on both sides: they must not tell the runs apart
   auto fresh = [&] {
     auto e = std::make_unique<FabricEngine>(buildWeave(p).fabric);
@@ -398,7 +403,7 @@ TEST(StateIO, SectionsAndClockRoundTripAndTheRunContinuesBitForBit) {
   a->saveState(path);
   long cached = 0;
   for (int s = 0; s < 40; ++s) a->step(dt), cached += a->collisions()->stats.cached;
-  EXPECT_GT(cached, 0);
+  if (model == ContactModel::Paper) EXPECT_GT(cached, 0);  // the gap model carries no contacts
 
   auto b = fresh();
   b->setState(loadState(path, b->fabric().nNodes()));
@@ -413,6 +418,7 @@ TEST(StateIO, SectionsAndClockRoundTripAndTheRunContinuesBitForBit) {
   for (Real e : fa.secFlat) maxFlat = std::max(maxFlat, e);
   EXPECT_GT(maxFlat, 0.3);  // the sections were part of the state
   std::remove(path.c_str());
+ }
 }
 
 // The Verlet skin only decides how often the broad phase runs: the contacts, and so the whole run,
@@ -474,6 +480,7 @@ TEST(Collider, ContactCacheFollowsTheUncachedRun) {
   for (int k = 0; k < 2; ++k) {
     FabricEngine e(buildWeave(p).fabric);
     ContactParams cp;
+    cp.model = ContactModel::Paper;  // the contact cache is the paper model's
     cp.cacheDistance = k == 0 ? 0.0 : ContactParams().cacheDistance;  // the default, 0.1 um
     e.enableCollisions(cp);
     e.collisions()->settle(e.fabric());

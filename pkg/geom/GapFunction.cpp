@@ -1,0 +1,321 @@
+#include "geom/GapFunction.hpp"
+#include "geom/SegmentDistance.hpp"
+#include <algorithm>
+#include <cmath>
+
+namespace woven {
+
+namespace {
+constexpr Real kPi = 3.14159265358979323846;
+// Below this the vector between two axis points gives no direction [m] (1e-5 of a KM2 filament).
+constexpr Real kTinyDistance = 1e-15;
+
+inline Real support(const SectionAt& q, const Vec3& n) { return ellipseSupport(q.u, q.d, q.a, q.b, n); }
+
+// Unit normal and signed distance of the axis points pA -> pB, on the pair's remembered side: when
+// the vector has turned against `orient` the axes have passed through each other, and the distance
+// counts negative along the old side. Without memory (a new pair) and without a direction (the axes
+// meet), the normal of both axes oriented by the CP centres.
+// Only where both points lie inside their segments: a piece that goes round the other's end
+// changes sides legitimately.
+void orientNormal(const Vec3& d, const Vec3* orient, bool interior, const Vec3& tA, const Vec3& tB,
+                  const Vec3& centres, Vec3& n, Real& r) {
+  const Real len = d.norm();
+  if (len > kTinyDistance) {
+    n = d / len, r = len;
+    if (orient && interior && n.dot(*orient) < 0) n = -n, r = -len;
+    return;
+  }
+  r = 0;
+  if (orient) {
+    n = *orient;
+    return;
+  }
+  n = tA.cross(tB);
+  n = n.norm() > 1e-9 ? Vec3(n.normalized()) : tA.unitOrthogonal();
+  if (n.dot(centres) < 0) n = -n;
+}
+
+// Unit tangent of the yarn at node k (central difference, as the section frames: bound/CPBound).
+Vec3 nodeTangent(const Fabric& f, Index k) {
+  const Yarn& y = f.yarns[f.nodeYarn[k]];
+  const Index n0 = y.firstNode, n1 = y.firstNode + y.nNodes - 1;
+  return (f.pos[std::min(k + 1, n1)] - f.pos[std::max(k - 1, n0)]).normalized();
+}
+
+// The yarn's tangent at s along CP e: its node tangents interpolated. At a crossing node of a
+// crimped yarn it is level where the chord is tilted by the crimp angle.
+Vec3 yarnTangent(const Fabric& f, Index e, Real s) {
+  const Index i = f.elem0[e];
+  return ((1 - s) * nodeTangent(f, i) + s * nodeTangent(f, i + 1)).normalized();
+}
+
+// Direction the sections' supports are measured along. The chords' common normal n leans by the
+// crimp angles (8 degrees in KM2 706 at one CP per span) where the yarns themselves are level at
+// the crossing, and across a flat section (a/b up to 6) that lean alone would add 30 % to its
+// support: so for crossing pieces the normal of the yarns' own tangents m = tA x tB is taken, and
+// n itself where n runs far from m (a CP end pressing on a yarn's side), blended between 30 and
+// 45 degrees. Side by side: n made normal to A's tangent.
+Vec3 supportDirection(const Vec3& n, const Vec3& tA, const Vec3& tB, bool side) {
+  if (!side) {
+    Vec3 m = tA.cross(tB);
+    const Real len = m.norm();
+    if (len > 0.34) {  // the yarns cross at more than 20 degrees
+      m /= len;
+      if (m.dot(n) < 0) m = -m;
+      const Real c = m.dot(n), c30 = 0.86602540378443865, c45 = 0.70710678118654752;
+      if (c >= c30) return m;
+      if (c > c45) return ((c - c45) / (c30 - c45) * m + (c30 - c) / (c30 - c45) * n).normalized();
+      return n;
+    }
+  }
+  const Vec3 p = n - n.dot(tA) * tA;
+  return p.norm() > 1e-9 ? Vec3(p.normalized()) : n;
+}
+
+// The section of CP e at s in the yarn's own plane (normal to yarnTangent), for the supports.
+SectionAt yarnSection(const Fabric& f, Index e, Real s, SectionRule rule) {
+  SectionAt q = sectionAt(f, e, s, rule);
+  const Vec3 t = yarnTangent(f, e, s);
+  Vec3 d = q.d - q.d.dot(t) * t;
+  q.t = t;
+  q.d = d.norm() > 1e-9 ? Vec3(d.normalized()) : t.unitOrthogonal();
+  q.u = t.cross(q.d);
+  return q;
+}
+
+// One CP-CP contact from the axis points A(s), B(t) with the sections' supports along the normal.
+void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kind, SectionRule rule, const Vec3* orient,
+              bool sections, CPContact& c) {
+  const Index i = f.elem0[a], j = f.elem0[b];
+  const Vec3 pA = (1 - s) * f.pos[i] + s * f.pos[i + 1], pB = (1 - t) * f.pos[j] + t * f.pos[j + 1];
+  const Vec3 tA = f.pos[i + 1] - f.pos[i], tB = f.pos[j + 1] - f.pos[j];
+  const Vec3 centres = 0.5 * (f.pos[j] + f.pos[j + 1] - f.pos[i] - f.pos[i + 1]);
+  Vec3 n;
+  Real r;
+  orientNormal(pB - pA, orient, s > 0 && s < 1 && t > 0 && t < 1, tA, tB, centres, n, r);
+  if (sections) {
+    const SectionAt qa = yarnSection(f, a, s, rule), qb = yarnSection(f, b, t, rule);
+    c.hDir = supportDirection(n, qa.t, qb.t, kind == ContactKind::Side);
+    if (kind == ContactKind::Cross) c.hA = qa.b, c.hB = qb.b;  // half-thicknesses (see GapFunction.hpp)
+    else c.hA = support(qa, c.hDir), c.hB = support(qb, c.hDir);
+  }
+  c.cpA = a, c.cpB = b, c.kind = kind;
+  c.sA = s, c.sB = t;
+  c.normal = n;
+  c.gap = r - c.hA - c.hB;
+  c.point = pA + (c.hA + 0.5 * c.gap) * n;  // half way between the two surfaces
+  c.sectional = true;
+  c.boxDepth = 0, c.time = 0;
+}
+
+// Closest point of CP b's axis to the point p, as its weight t in [0, 1].
+Real closestOnAxis(const Fabric& f, Index b, const Vec3& p) { return alongCP(f, b, p); }
+}  // namespace
+
+SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule) {
+  const Index i = f.elem0[e], j = i + 1;
+  SectionAt q;
+  q.centre = (1 - s) * f.pos[i] + s * f.pos[j];
+  q.t = (f.pos[j] - f.pos[i]).normalized();
+  const Vec3& dj = f.secDir[j];
+  Vec3 d = (1 - s) * f.secDir[i] + s * (f.secDir[i].dot(dj) < 0 ? Vec3(-dj) : dj);
+  d -= d.dot(q.t) * q.t;
+  q.d = d.norm() > 1e-9 ? Vec3(d.normalized()) : q.t.unitOrthogonal();
+  q.u = q.t.cross(q.d);
+  const SemiAxes si = semiAxes(f.secRadius[i], f.secFlat[i], rule), sj = semiAxes(f.secRadius[j], f.secFlat[j], rule);
+  q.a = (1 - s) * si.a + s * sj.a;
+  q.b = (1 - s) * si.b + s * sj.b;
+  return q;
+}
+
+bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide) {
+  const Vec3 tA = (f.pos[f.elem0[a] + 1] - f.pos[f.elem0[a]]).normalized();
+  const Vec3 tB = (f.pos[f.elem0[b] + 1] - f.pos[f.elem0[b]]).normalized();
+  static const Real cosEnter = std::cos(kSideEnterDeg * kPi / 180), cosLeave = std::cos(kSideLeaveDeg * kPi / 180);
+  return std::abs(tA.dot(tB)) >= (wasSide ? cosLeave : cosEnter);
+}
+
+int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, const Vec3* orient, CPContact out[2]) {
+  const Index i = f.elem0[a], j = f.elem0[b];
+  if (side) {
+    // The part of A alongside B: B's ends projected on A's axis, clipped to A.
+    const Vec3 tA = f.pos[i + 1] - f.pos[i];
+    const Real L2 = tA.squaredNorm();
+    const Real s0 = (f.pos[j] - f.pos[i]).dot(tA) / L2, s1 = (f.pos[j + 1] - f.pos[i]).dot(tA) / L2;
+    const Real lo = std::max(Real(0), std::min(s0, s1)), hi = std::min(Real(1), std::max(s0, s1));
+    if (hi >= lo) {
+      // Two points at the ends of the shared part carry a line contact's force and moment; a short
+      // shared part (the pieces meet end to end) is one point.
+      const int n = hi - lo > 1e-3 ? 2 : 1;
+      const Real at[2] = {n == 2 ? lo : 0.5 * (lo + hi), hi};
+      for (int k = 0; k < n; ++k) {
+        const Real s = at[k];
+        fillPair(f, a, b, s, closestOnAxis(f, b, (1 - s) * f.pos[i] + s * f.pos[i + 1]), ContactKind::Side, rule,
+                 orient, true, out[k]);
+      }
+      return n;
+    }
+  }
+  // Crossing pieces, or parallel ones that do not lie alongside: the closest points of the axes.
+  const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
+  fillPair(f, a, b, sc.s, sc.t, ContactKind::Cross, rule, orient, true, out[0]);
+  return 1;
+}
+
+void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections) {
+  const Index i = f.elem0[c.cpA], j = f.elem0[c.cpB];
+  Real s = c.sA, t;
+  if (c.kind == ContactKind::Side) {
+    t = closestOnAxis(f, c.cpB, (1 - s) * f.pos[i] + s * f.pos[i + 1]);
+  } else {
+    const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
+    s = sc.s, t = sc.t;
+  }
+  const Vec3 orient = c.normal;
+  fillPair(f, c.cpA, c.cpB, s, t, c.kind == ContactKind::Paper ? ContactKind::Cross : c.kind, rule, &orient, sections, c);
+}
+
+bool closestOnEllipse(Real a, Real b, Real px, Real py, Real& qx, Real& qy) {
+  // Eberly's algorithm wants e0 >= e1 and the point in the first quadrant: swap and reflect.
+  const bool swap = a < b;
+  const Real e0 = swap ? b : a, e1 = swap ? a : b;
+  const Real y0 = std::abs(swap ? py : px), y1 = std::abs(swap ? px : py);
+  const Real g0 = (y0 / e0) * (y0 / e0) + (y1 / e1) * (y1 / e1) - 1;
+  Real x0, x1;
+  if (y1 > 0) {
+    if (y0 > 0) {
+      const Real z0 = y0 / e0, z1 = y1 / e1, r0 = (e0 / e1) * (e0 / e1);
+      if (g0 != 0) {
+        // Root of F(s) = (r0 z0 / (s + r0))^2 + (z1 / (s + 1))^2 - 1 by bisection: monotone in s.
+        const Real n0 = r0 * z0;
+        Real s0 = z1 - 1, s1 = g0 < 0 ? 0.0 : std::hypot(n0, z1) - 1, s = 0;
+        for (int it = 0; it < 200; ++it) {
+          s = 0.5 * (s0 + s1);
+          if (s == s0 || s == s1) break;
+          const Real q0 = n0 / (s + r0), q1 = z1 / (s + 1), g = q0 * q0 + q1 * q1 - 1;
+          if (g > 0) s0 = s;
+          else if (g < 0) s1 = s;
+          else break;
+        }
+        x0 = r0 * y0 / (s + r0), x1 = y1 / (s + 1);
+      } else {
+        x0 = y0, x1 = y1;
+      }
+    } else {
+      x0 = 0, x1 = e1;
+    }
+  } else {
+    const Real numer0 = e0 * y0, denom0 = e0 * e0 - e1 * e1;
+    if (numer0 < denom0) {
+      const Real xde0 = numer0 / denom0;
+      x0 = e0 * xde0, x1 = e1 * std::sqrt(std::max(Real(0), 1 - xde0 * xde0));
+    } else {
+      x0 = e0, x1 = 0;
+    }
+  }
+  x0 = std::copysign(x0, swap ? py : px), x1 = std::copysign(x1, swap ? px : py);
+  qx = swap ? x1 : x0, qy = swap ? x0 : x1;
+  return g0 >= 0;
+}
+
+namespace {
+// Sphere form: g = |c - P| - R, P the closest point of the (held) section ellipse at c's place s.
+Real sphereGapAt(const Vec3& x0, const Vec3& x1, const Vec3& c, Real R, const BodyContact& h, Real& s, Vec3& n,
+                 Vec3& P) {
+  const Vec3 axis = x1 - x0;
+  s = std::clamp((c - x0).dot(axis) / axis.squaredNorm(), Real(0), Real(1));
+  const Vec3 A = x0 + s * axis, q = c - A;
+  Real qx, qy;
+  const bool outside = closestOnEllipse(h.secA, h.secB, q.dot(h.secU), q.dot(h.secD), qx, qy);
+  P = A + qx * h.secU + qy * h.secD;
+  const Vec3 diff = c - P;
+  const Real len = diff.norm();
+  if (len > kTinyDistance) {
+    n = outside ? Vec3(diff / len) : Vec3(-diff / len);  // inside: out along the surface normal at P
+    return (outside ? len : -len) - R;
+  }
+  n = (qx / (h.secA * h.secA) * h.secU + qy / (h.secB * h.secB) * h.secD).normalized();  // c on the surface
+  return -R;
+}
+
+// Box form: g = (box's lowest point along n) - (node's section reach along n), n a face normal of
+// the box (turning with it), the section's support along n held in h.support[node].
+Real boxGapAt(const Fabric& f, Index cp, const OBB& box, const Vec3& n, const BodyContact& h, int node) {
+  const Real boxMin = box.centre.dot(n) - (box.axes.transpose() * n).cwiseAbs().dot(box.extent);
+  return boxMin - (f.pos[f.elem0[cp] + node].dot(n) + h.support[node]);
+}
+
+// Node k's section frame across the yarn's tangent t there (its minor axis made normal to t).
+void nodeFrame(const Fabric& f, Index k, const Vec3& t, SectionRule rule, Vec3& u, Vec3& d, SemiAxes& ax) {
+  d = f.secDir[k] - f.secDir[k].dot(t) * t;
+  d = d.norm() > 1e-9 ? Vec3(d.normalized()) : t.unitOrthogonal();
+  u = t.cross(d);
+  ax = semiAxes(f.secRadius[k], f.secFlat[k], rule);
+}
+
+}  // namespace
+
+int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
+            BodyContact out[2]) {
+  const Index i = f.elem0[cp];
+  // Listed when it can touch within the step: a speculative contact (Box2D), whose row lets the pair
+  // close exactly its gap.
+  const auto listed = [&](const BodyContact& c, const Vec3& vCP) {
+    const Real vn = (body.velocityAt(c.point) - vCP).dot(c.normal);
+    return c.gap <= margin + std::max(Real(0), -vn) * dt;
+  };
+  BodyContact c;
+  c.cp = cp, c.part = part, c.gapModel = true, c.time = 0;
+  if (body.parts[part].type == RigidPart::Type::Sphere) {
+    const Vec3 centre = body.partCentre(part);
+    const SectionAt q = sectionAt(f, cp, alongCP(f, cp, centre), rule);
+    c.secU = q.u, c.secD = q.d, c.secA = q.a, c.secB = q.b;
+    c.gap = sphereGapAt(f.pos[i], f.pos[i + 1], centre, body.parts[part].radius, c, c.s, c.normal, c.point);
+    if (!listed(c, (1 - c.s) * f.vel[i] + c.s * f.vel[i + 1])) return 0;
+    out[0] = c;
+    return 1;
+  }
+  // The face of the box that leaves the CP the most room (the separating-axis choice among the
+  // box's faces), then one contact per end section: a level CP under a face is held at both ends.
+  const OBB box = body.partBox(part);
+  Vec3 u[2], d[2];
+  SemiAxes ax[2];
+  for (int k = 0; k < 2; ++k) nodeFrame(f, i + k, nodeTangent(f, i + k), rule, u[k], d[k], ax[k]);
+  Real best = -INFINITY;
+  for (int j = 0; j < 6; ++j) {
+    const Vec3 n = (j < 3 ? 1.0 : -1.0) * box.axes.col(j % 3);
+    BodyContact h;
+    for (int k = 0; k < 2; ++k) h.support[k] = ellipseSupport(u[k], d[k], ax[k].a, ax[k].b, n);
+    const Real g = std::min(boxGapAt(f, cp, box, n, h, 0), boxGapAt(f, cp, box, n, h, 1));
+    if (g > best) best = g, c.normal = n, c.support[0] = h.support[0], c.support[1] = h.support[1];
+  }
+  c.localNormal = box.axes.transpose() * c.normal;
+  int count = 0;
+  for (int k = 0; k < 2; ++k) {
+    c.s = k;
+    c.gap = boxGapAt(f, cp, box, c.normal, c, k);
+    // On the line through the node along n (the support is held: the arm of the body's row is then
+    // exactly the gradient of g in the body's rotation).
+    c.point = f.pos[i + k] + c.support[k] * c.normal;
+    if (listed(c, f.vel[i + k])) out[count++] = c;
+  }
+  return count;
+}
+
+void remeasureBody(const Fabric& f, const RigidBody& body, BodyContact& c) {
+  const Index i = f.elem0[c.cp];
+  if (body.parts[c.part].type == RigidPart::Type::Sphere) {
+    Vec3 P;
+    c.gap = sphereGapAt(f.pos[i], f.pos[i + 1], body.partCentre(c.part), body.parts[c.part].radius, c, c.s, c.normal, P);
+    c.point = P;
+    return;
+  }
+  const OBB box = body.partBox(c.part);
+  c.normal = box.axes * c.localNormal;
+  const int node = c.s > 0.5 ? 1 : 0;
+  c.gap = boxGapAt(f, c.cp, box, c.normal, c, node);
+  c.point = f.pos[i + node] + c.support[node] * c.normal;
+}
+
+}  // namespace woven

@@ -1,0 +1,81 @@
+// Gap functions of the contact model `gap` (docs/collisions.md, "Gap functions"): for each contact
+// kind, one scalar g(x) of the node positions (and of a body's pose), < 0 an overlap, together with
+// its gradient, which is the impulse row (law/ImpulseLaw) and the direction of the position
+// projection (law/PositionProjection). Measure, solve and project thus act on one function: the
+// paper's response measured the overlap on one line and pushed along another, and at tilted,
+// sliding crossings the difference ratcheted the yarns into each other (docs/collisions.md).
+//
+// Within a step the section state (semi-axes, minor-axis direction: state variables that the
+// flattening passes change between measurements) is held fixed: it is a parameter of g, not a
+// function of the positions. The kinds:
+//   Cross  crossing CPs: g = |B(t*) - A(s*)| - h_A - h_B, (s*, t*) the closest points of the two
+//          axis segments, n the unit vector between them and h_X the support of X's section at the
+//          point along n. By the envelope theorem dg/dx_k = w_k n with w = -(1-s*), -s*, 1-t*, t*.
+//   Side   side-by-side (near-parallel) CPs, two points: s fixed at the ends of the part of A that
+//          lies alongside B (a material point of A), t* the closest point of B's axis to A(s);
+//          the same g and gradient with that s: a line contact as a two-point manifold.
+//   Sphere a CP and a sphere part of centre c, radius R: g = |c - P| - R, P the closest point to c
+//          of the CP's elliptic section at s* (c's place along the axis); n = (c - P)/|c - P| is the
+//          ellipse's surface normal at P. dg/dx_k = -w_k n, dg/dc = n (body rows: v + w x (c - x_G)).
+//   Box    a CP and a box part, n the separating-axis normal of the two boxes (held for the step):
+//          one contact per end section k: g_k = min over the box of y.n - (x_k.n + support_k(n)),
+//          the box's lowest point along n minus the section's deepest point; n the box face normal
+//          (of 6) that leaves the CP the most room (the separating-axis choice among the box's
+//          faces; it turns with the box), the supports held. dg_k/dx_k = -n, dg_k/dbody = n at the
+//          arm x_k + support_k n - x_G (translation and rotation).
+// A pair of CPs is Cross or Side by the angle between the axes with hysteresis (enter Side below
+// kSideEnterDeg, leave above kSideLeaveDeg), never by the instantaneous normal. Orientation: a pair
+// remembers its normal, and where the axes have passed through each other (the vector between the
+// closest points turned against it) g is -|B - A| - h_A - h_B along the remembered side, so a yarn
+// pushed through another is pulled back, not pushed on.
+#pragma once
+#include "fabric/Fabric.hpp"
+#include "geom/BodyContact.hpp"
+#include "geom/CPContact.hpp"
+#include "shape/RigidBody.hpp"
+#include "shape/Section.hpp"
+
+namespace woven {
+
+constexpr Real kSideEnterDeg = 20;  ///< a pair whose axes are closer than this in angle becomes Side [deg]
+constexpr Real kSideLeaveDeg = 30;  ///< ... and stays Side until they part by more than this [deg]
+
+/// CP e's section at s in [0, 1]: centre on the axis, tangent t, major axis u, minor axis d (unit,
+/// normal to t; end directions interpolated with the same sign), semi-axes interpolated linearly.
+struct SectionAt {
+  Vec3 centre, t, u, d;
+  Real a, b;
+};
+SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule);
+
+/// Side (true) or Cross for CPs a, b, with hysteresis: `wasSide` is the pair's kind at its last
+/// measurement.
+bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide);
+
+/// The contacts of the pair a < b as the kind says (1 for Cross, 1 or 2 for Side), in out[]: normal,
+/// gap (sections measured now), sA/sB, point, kind, hA/hB. `orient` (may be null) is the pair's
+/// remembered normal. Returns the count.
+int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, const Vec3* orient, CPContact out[2]);
+
+/// Measures contact c again at the current positions: closest points (Cross) or closest point of
+/// B to the fixed A(sA) (Side), normal kept on c's side, and the gap with c's section supports
+/// hA, hB (held) or, with `sections`, supports measured again (after flattening). This is g(x).
+void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections);
+
+/// CP-body contacts of the gap model in out[] (the sphere form: 1; the box form: one per end section
+/// that can touch), each listed when g <= margin + the approach within dt (relative normal velocity
+/// of the two points: a speculative contact, whose row lets the pair close exactly its gap).
+/// Returns the count.
+int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
+            BodyContact out[2]);
+
+/// Measures body contact c again at the current positions and pose (its normal held for a box, its
+/// section frame held for a sphere): g(x, body pose). Sets gap, point, s and normal (sphere).
+void remeasureBody(const Fabric& f, const RigidBody& body, BodyContact& c);
+
+/// Closest point of the ellipse (x/a)^2 + (y/b)^2 = 1 to (px, py) (Eberly, "Distance from a point to
+/// an ellipse", robust bisection on the root of F(t)); its coordinates in qx, qy. Returns true when
+/// the point lies outside (or on) the ellipse.
+bool closestOnEllipse(Real a, Real b, Real px, Real py, Real& qx, Real& qy);
+
+}  // namespace woven

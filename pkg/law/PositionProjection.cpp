@@ -1,0 +1,106 @@
+#include "law/PositionProjection.hpp"
+#include "fabric/SpringEnergy.hpp"
+#include "geom/GapFunction.hpp"
+#include <cmath>
+
+namespace woven {
+
+void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
+                                 std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop,
+                                 Real maxMove, SectionRule rule, ProjectionReport& rep) {
+  rep = ProjectionReport{};
+  if (sweeps <= 0 || (contacts.empty() && bodyContacts.empty())) return;
+  allowance_.assign(contacts.size(), NAN);
+  marked_.resize(f.nElems(), 0);
+  elems_.clear();
+  Real before = 0;
+  // Before node k moves for the first time, the spring energy of its (at most two) CPs is counted.
+  const auto touch = [&](Index k) {
+    const Yarn& y = f.yarns[f.nodeYarn[k]];
+    const Index local = k - y.firstNode;
+    for (Index e : {y.firstElem + local - 1, y.firstElem + local})
+      if (e >= y.firstElem && e < y.firstElem + y.nElems && !marked_[e]) {
+        marked_[e] = 1, elems_.push_back(e);
+        before += springEnergy(f, e);
+      }
+  };
+  // After the first sweep only the contacts with a node (or a body) moved in the sweep before can
+  // have changed: the others are skipped (most of a ply is at rest).
+  movedNow_.assign(f.nNodes(), 0);
+  bool bodyMoved = true;
+  const auto movedBefore = [&](Index k) { return movedBefore_[k] != 0; };
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    ++rep.sweeps;
+    bool moved = false, bodyMovedNow = false;
+    const bool all = sweep == 0;
+    movedBefore_.swap(movedNow_);
+    movedNow_.assign(f.nNodes(), 0);
+    rep.overlapLeft = 0;
+    for (std::size_t q = 0; q < contacts.size(); ++q) {
+      CPContact& c = contacts[q];
+      if (!f.alive[c.cpA] || !f.alive[c.cpB]) continue;  // broken in this step
+      const Index i = f.elem0[c.cpA], j = f.elem0[c.cpB];
+      if (!all && !(movedBefore(i) || movedBefore(i + 1) || movedBefore(j) || movedBefore(j + 1))) continue;
+      remeasure(f, c, rule, false);
+      if (!(c.gap < -slop)) continue;
+      if (std::isnan(allowance_[q])) allowance_[q] = allowance(c);
+      const Real C = c.gap + allowance_[q] + slop;
+      if (!(C < 0)) continue;
+      const Index node[4] = {f.elem0[c.cpA], f.elem0[c.cpA] + 1, f.elem0[c.cpB], f.elem0[c.cpB] + 1};
+      const Real w[4] = {-(1 - c.sA), -c.sA, 1 - c.sB, c.sB};
+      Real K = 0;
+      for (int k = 0; k < 4; ++k) K += w[k] * w[k] * f.invMass[node[k]];
+      if (!(K > 0)) continue;  // both CPs kinematic
+      const Real dl = std::min(-C, maxMove) / K;  // at most maxMove closed per contact and sweep
+      for (int k = 0; k < 4; ++k)
+        if (w[k] != 0 && f.invMass[node[k]] > 0) {
+          touch(node[k]);
+          f.pos[node[k]] += (w[k] * f.invMass[node[k]] * dl) * c.normal;
+          movedNow_[node[k]] = 1;
+        }
+      ++rep.pushed;
+      moved = true;
+      rep.overlapLeft = std::max(rep.overlapLeft, -C);
+    }
+    for (BodyContact& c : bodyContacts) {
+      if (!f.alive[c.cp]) continue;
+      const Index i = f.elem0[c.cp];
+      if (!all && !bodyMoved && !(movedBefore(i) || movedBefore(i + 1))) continue;
+      RigidBody& b = bodies[c.body];
+      remeasureBody(f, b, c);
+      const Real C = c.gap + slop;
+      if (!(C < 0)) continue;
+      const Index node[2] = {f.elem0[c.cp], f.elem0[c.cp] + 1};
+      const Real w[2] = {-(1 - c.s), -c.s};
+      const Vec3 arm = c.point - b.pos, rn = arm.cross(c.normal);
+      const Mat3 invI = b.invInertiaWorld();
+      Real K = b.invMass() + rn.dot(invI * rn);
+      for (int k = 0; k < 2; ++k) K += w[k] * w[k] * f.invMass[node[k]];
+      if (!(K > 0)) continue;  // kinematic CP and body
+      const Real dl = std::min(-C, maxMove) / K;  // at most maxMove closed per contact and sweep
+      for (int k = 0; k < 2; ++k)
+        if (w[k] != 0 && f.invMass[node[k]] > 0) {
+          touch(node[k]);
+          f.pos[node[k]] += (w[k] * f.invMass[node[k]] * dl) * c.normal;
+          movedNow_[node[k]] = 1;
+        }
+      if (b.dynamic()) {
+        bodyMovedNow = true;
+        b.pos += (b.invMass() * dl) * c.normal;
+        const Vec3 turn = invI * rn * dl;  // a small rotation [rad]
+        const Real angle = turn.norm();
+        if (angle > 0) b.ori = (Quat(Eigen::AngleAxis<Real>(angle, turn / angle)) * b.ori).normalized();
+      }
+      ++rep.pushed;
+      moved = true;
+      rep.overlapLeft = std::max(rep.overlapLeft, -C);
+    }
+    bodyMoved = bodyMovedNow;
+    if (!moved) break;
+  }
+  Real after = 0;
+  for (Index e : elems_) after += springEnergy(f, e), marked_[e] = 0;
+  rep.energy = after - before;
+}
+
+}  // namespace woven

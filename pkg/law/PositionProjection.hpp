@@ -1,0 +1,49 @@
+// Position projection after the drift (contact model `gap`; docs/collisions.md): the nodes (and
+// bodies) of contacts that end the step overlapping are moved apart along the gradient of the same
+// gap function the impulse rows are made of (geom/GapFunction.hpp), so nothing ratchets: what the
+// rows let through, the projection takes back on the same measure. Nonlinear Gauss-Seidel on
+// positions (Box2D's NGS; Catto, "Modeling and Solving Constraints"): per sweep and contact,
+// g is measured again at the current positions and, where g + allowance < -slop,
+//     x_k += (w_k / m_k) dl grad_k,   dl = min(-(g + allowance + slop), maxMove) / sum_k |grad_k|^2 / m_k,
+// with a body's share dl n / M and its turn I^-1 (r x n) dl. The allowance is what flattening can
+// still take along the normal (the next step's flattening passes absorb that part). Velocities are
+// not changed. The elastic energy the moves put into the springs is returned for the books
+// (EnergyBooks::projection): exact, over the CPs whose nodes moved.
+#pragma once
+#include "fabric/Fabric.hpp"
+#include "geom/BodyContact.hpp"
+#include "geom/CPContact.hpp"
+#include "law/ContactParams.hpp"
+#include <functional>
+#include <vector>
+
+namespace woven {
+
+struct ProjectionReport {
+  int sweeps = 0;         ///< sweeps made
+  long pushed = 0;        ///< contact moves made (over all sweeps)
+  Real energy = 0;        ///< spring energy the moves put in [J] (< 0: taken out)
+  Real overlapLeft = 0;   ///< largest overlap beyond allowance + slop met in the last sweep made [m] (0: none)
+};
+
+class PositionProjection {
+ public:
+  /// What flattening can still take along a contact's normal (both CPs) [m].
+  using Allowance = std::function<Real(const CPContact&)>;
+
+  /// Projects the contacts of the step (measured again here; their normals and weights are updated)
+  /// with `sweeps` sweeps and the slop [m]; one move closes at most maxMove [m] of a contact's
+  /// overlap (Box2D's maxLinearCorrection: a deep overlap, say a whipping broken end's, is taken out
+  /// over a few steps instead of throwing the nodes into their other neighbours at once).
+  void project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
+               std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop, Real maxMove,
+               SectionRule rule, ProjectionReport& report);
+
+ private:
+  std::vector<Real> allowance_;       // per contact, measured once per call (NaN: not yet)
+  std::vector<std::uint8_t> marked_;  // per CP: its spring energy is counted
+  std::vector<Index> elems_;
+  std::vector<std::uint8_t> movedBefore_, movedNow_;  // per node: moved in the sweep before / in this one
+};
+
+}  // namespace woven
