@@ -157,9 +157,11 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
       return n;
     }
   }
-  // Crossing pieces, or parallel ones that do not lie alongside: the closest points of the axes.
+  // Crossing pieces: the closest points of the axes. Parallel ones that do not lie alongside (end
+  // to end) keep the side-by-side measure at their closest points, so that the gap does not jump
+  // from the half-thickness to the width when they slide alongside.
   const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
-  fillPair(f, a, b, sc.s, sc.t, ContactKind::Cross, rule, orient, true, out[0]);
+  fillPair(f, a, b, sc.s, sc.t, side ? ContactKind::Side : ContactKind::Cross, rule, orient, true, out[0]);
   return 1;
 }
 

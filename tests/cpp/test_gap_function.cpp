@@ -1,0 +1,283 @@
+// The gap functions of the contact model `gap` (geom/GapFunction.hpp) against their impulse rows:
+// for every contact kind, central finite differences of g in each node coordinate (and in a body's
+// translation and rotation) on 1e4 random configurations must equal the row the impulse law builds
+// (weights w_k times the normal; a body's n and arm x n). An independent oracle of the row: g is
+// evaluated as a plain function of the positions, the row from the contact's normal and weights.
+// Also: closest points on an ellipse against a dense sampling, and the side of the normal.
+#include "chain_util.hpp"
+#include "geom/GapFunction.hpp"
+#include <gtest/gtest.h>
+#include <cmath>
+#include <random>
+
+using namespace woven;
+using namespace woven_test;
+
+namespace {
+
+constexpr int kConfigs = 10000;
+
+Vec3 randomUnit(std::mt19937_64& rng) {
+  std::normal_distribution<Real> n(0, 1);
+  return Vec3(n(rng), n(rng), n(rng)).normalized();
+}
+
+// Two single-CP yarns through the given end points; each node's section flattened at random
+// (eps in [0, 0.6)) along a random direction across its CP.
+Fabric randomPair(std::mt19937_64& rng, const Vec3& a0, const Vec3& a1, const Vec3& b0, const Vec3& b1) {
+  YarnSection sec;
+  sec.width = 0.65e-3, sec.thickness = 0.11e-3;
+  Fabric f;
+  f.addYarn({a0, a1}, km2Material(), sec);
+  f.addYarn({b0, b1}, km2Material(), sec);
+  std::uniform_real_distribution<Real> eps(0, 0.6);
+  for (Index k = 0; k < 4; ++k) {
+    const Vec3 t = (k < 2 ? a1 - a0 : b1 - b0).normalized();
+    Vec3 d = randomUnit(rng);
+    f.secDir[k] = (d - d.dot(t) * t).normalized();
+    f.secFlat[k] = eps(rng);
+  }
+  return f;
+}
+
+// Row of a CP-CP contact as ImpulseLaw builds it: node weights -(1-sA), -sA, 1-sB, sB along n.
+void pairRow(const CPContact& c, Vec3 grad[4]) {
+  const Real w[4] = {-(1 - c.sA), -c.sA, 1 - c.sB, c.sB};
+  for (int k = 0; k < 4; ++k) grad[k] = w[k] * c.normal;
+}
+
+// Central differences of g (remeasure with the sections held, the contact's normal as the side)
+// against the row; false when a clamp of the closest points switches within the step (a kink of g).
+bool pairMatches(Fabric f, const CPContact& c0, Real h, Real tol, Real& worst) {
+  Vec3 row[4];
+  pairRow(c0, row);
+  for (int k = 0; k < 4; ++k)
+    for (int d = 0; d < 3; ++d) {
+      CPContact p = c0, m = c0;
+      const Real x = f.pos[k][d];
+      f.pos[k][d] = x + h;
+      remeasure(f, p, SectionRule::ConstantArea, false);
+      f.pos[k][d] = x - h;
+      remeasure(f, m, SectionRule::ConstantArea, false);
+      f.pos[k][d] = x;
+      const auto clamp = [](Real s) { return s <= 0 ? 0 : (s >= 1 ? 2 : 1); };
+      if (clamp(p.sA) != clamp(m.sA) || clamp(p.sB) != clamp(m.sB) || clamp(p.sA) != clamp(c0.sA) ||
+          clamp(p.sB) != clamp(c0.sB))
+        return false;
+      const Real fd = (p.gap - m.gap) / (2 * h);
+      worst = std::max(worst, std::abs(fd - row[k][d]));
+      EXPECT_NEAR(fd, row[k][d], tol) << "node " << k << " axis " << d;
+    }
+  return true;
+}
+
+}  // namespace
+
+// Crossing pieces (more than 30 degrees apart, up to 0.4 mm between the axes, ends anywhere): the
+// distance of the closest points minus the held half-thicknesses; its gradient is the row exactly.
+TEST(GapFunction, CrossingRowIsTheGradientOfTheGap) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  int tested = 0;
+  Real worst = 0;
+  for (int n = 0; n < kConfigs; ++n) {
+    const Vec3 tA = randomUnit(rng);
+    Vec3 tB = randomUnit(rng);
+    if (std::abs(tA.dot(tB)) > std::cos(30 * M_PI / 180)) tB = tA.cross(tB).normalized();
+    const Vec3 cA = 0.3e-3 * Vec3(u(rng), u(rng), u(rng)), cB = 0.3e-3 * Vec3(u(rng), u(rng), u(rng));
+    const Real lA = 0.4e-3 + 0.6e-3 * (u(rng) + 1) / 2, lB = 0.4e-3 + 0.6e-3 * (u(rng) + 1) / 2;
+    Fabric f = randomPair(rng, cA - 0.5 * lA * tA, cA + 0.5 * lA * tA, cB - 0.5 * lB * tB, cB + 0.5 * lB * tB);
+    ASSERT_FALSE(sideBySide(f, 0, 1, false));
+    CPContact c[2];
+    ASSERT_EQ(pairGaps(f, 0, 1, false, SectionRule::ConstantArea, nullptr, c), 1);
+    EXPECT_EQ(c[0].kind, ContactKind::Cross);
+    if (std::abs(c[0].gap + c[0].hA + c[0].hB) < 1e-9) continue;  // the axes meet: no direction
+    tested += pairMatches(f, c[0], 1e-11, 1e-5, worst);
+  }
+  EXPECT_GT(tested, 0.95 * kConfigs) << "configurations on a kink of g";
+  RecordProperty("worst", std::to_string(worst));
+}
+
+// Side-by-side pieces (0 to 19 degrees apart: classed Side on entry), one or two points at the ends
+// of the part alongside: A's point fixed along A, B's the closest to it; the same gradient.
+TEST(GapFunction, SideBySideRowIsTheGradientOfTheGap) {
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<Real> u(-1, 1), angle(0, 19 * M_PI / 180);
+  int tested = 0, two = 0;
+  Real worst = 0;
+  for (int n = 0; n < kConfigs; ++n) {
+    const Vec3 tA = randomUnit(rng);
+    const Vec3 axis = tA.cross(randomUnit(rng)).normalized();
+    const Vec3 tB = Eigen::AngleAxis<Real>(angle(rng), axis) * tA;
+    const Vec3 cA = Vec3::Zero();
+    Vec3 off = randomUnit(rng);
+    off -= off.dot(tA) * tA;
+    const Vec3 cB = 0.6e-3 * u(rng) * tA + 0.5e-3 * (u(rng) + 1.2) / 2.2 * off.normalized();
+    Fabric f = randomPair(rng, cA - 0.4e-3 * tA, cA + 0.4e-3 * tA, cB - 0.4e-3 * tB, cB + 0.4e-3 * tB);
+    ASSERT_TRUE(sideBySide(f, 0, 1, false));
+    CPContact c[2];
+    const int m = pairGaps(f, 0, 1, true, SectionRule::ConstantArea, nullptr, c);
+    two += m == 2;
+    for (int q = 0; q < m; ++q) {
+      EXPECT_EQ(c[q].kind, ContactKind::Side);
+      tested += pairMatches(f, c[q], 1e-11, 1e-5, worst);
+    }
+  }
+  EXPECT_GT(two, kConfigs / 4);  // pieces alongside each other get the two-point form
+  EXPECT_GT(tested, kConfigs);
+}
+
+namespace {
+// A body with one part (a sphere of radius R, or a box of half-sizes H) offset from its centre of
+// mass, turned at random: a clump member, so that the arm of the row is tested too.
+RigidBody randomBody(std::mt19937_64& rng, bool sphere, const Vec3& partCentre) {
+  std::uniform_real_distribution<Real> u(0.5, 1.5);
+  RigidBody b;
+  RigidPart part;
+  part.type = sphere ? RigidPart::Type::Sphere : RigidPart::Type::Box;
+  part.radius = 1.5e-3 * u(rng);
+  part.halfSize = 1e-3 * Vec3(u(rng), u(rng), u(rng));
+  part.offset = 0.5e-3 * randomUnit(rng);
+  part.ori = Quat(Eigen::AngleAxis<Real>(u(rng), randomUnit(rng)));
+  b.parts.push_back(part);
+  b.mass = 1e-3, b.inertia = Vec3::Constant(1e-9);
+  b.ori = Quat(Eigen::AngleAxis<Real>(3 * u(rng), randomUnit(rng)));
+  b.pos = partCentre - b.ori * part.offset;
+  return b;
+}
+
+// Central differences of a body contact's g in the CP's node coordinates and the body's
+// translation and rotation (about its centre of mass) against the row: -w_k n on the CP's nodes,
+// n and arm x n on the body, arm = point - centre of mass.
+void bodyMatches(Fabric& f, RigidBody& b, const BodyContact& c0, Real h, Real tol, Real& worst) {
+  const Real w[2] = {-(1 - c0.s), -c0.s};
+  const Vec3 arm = c0.point - b.pos, rn = arm.cross(c0.normal);
+  const auto g = [&](const RigidBody& body) {
+    BodyContact c = c0;
+    remeasureBody(f, body, c);
+    return c.gap;
+  };
+  for (int k = 0; k < 2; ++k)
+    for (int d = 0; d < 3; ++d) {
+      const Real x = f.pos[k][d];
+      f.pos[k][d] = x + h;
+      const Real gp = g(b);
+      f.pos[k][d] = x - h;
+      const Real gm = g(b);
+      f.pos[k][d] = x;
+      const Real fd = (gp - gm) / (2 * h), row = w[k] * c0.normal[d];
+      worst = std::max(worst, std::abs(fd - row));
+      EXPECT_NEAR(fd, row, tol) << "node " << k << " axis " << d;
+    }
+  for (int d = 0; d < 3; ++d) {
+    RigidBody p = b, m = b;
+    p.pos[d] += h, m.pos[d] -= h;
+    const Real fd = (g(p) - g(m)) / (2 * h);
+    worst = std::max(worst, std::abs(fd - c0.normal[d]));
+    EXPECT_NEAR(fd, c0.normal[d], tol) << "body translation " << d;
+    const Real th = h / 1e-3;  // a turn moving the part by about h
+    p = b, m = b;
+    p.ori = Quat(Eigen::AngleAxis<Real>(th, Vec3::Unit(d))) * b.ori;
+    m.ori = Quat(Eigen::AngleAxis<Real>(-th, Vec3::Unit(d))) * b.ori;
+    const Real fr = (g(p) - g(m)) / (2 * th);
+    worst = std::max(worst, std::abs(fr - rn[d]) / 1e-3);
+    EXPECT_NEAR(fr, rn[d], tol * 1e-3) << "body rotation " << d;
+  }
+}
+}  // namespace
+
+// A CP and a sphere part: the distance from the centre to the closest point of the held section
+// ellipse, minus R; its gradient in the nodes, the translation and the rotation is the row.
+TEST(GapFunction, SphereRowIsTheGradientOfTheGap) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  int tested = 0;
+  Real worst = 0;
+  for (int n = 0; n < kConfigs; ++n) {
+    const Vec3 t = randomUnit(rng);
+    Fabric f = randomPair(rng, -0.4e-3 * t, 0.4e-3 * t, Vec3(5e-3, 0, 0), Vec3(6e-3, 0, 0));
+    // The sphere's centre beside the CP (or beyond an end), its surface within 0.2 mm of the yarn.
+    Vec3 side = randomUnit(rng);
+    side -= side.dot(t) * t;
+    RigidBody b = randomBody(rng, true, Vec3::Zero());
+    const Real R = b.parts[0].radius;
+    const Vec3 centre = 0.6e-3 * u(rng) * t + (R + 0.2e-3 * u(rng) + 0.3e-3) * side.normalized();
+    b.pos += centre - b.partCentre(0);
+    BodyContact c[2];
+    ASSERT_EQ(bodyGap(f, 0, b, 0, 1e-3, 1, SectionRule::ConstantArea, c), 1);
+    if (c[0].s <= 1e-6 || c[0].s >= 1 - 1e-6) continue;  // beyond an end: a kink of s, tested below
+    bodyMatches(f, b, c[0], 1e-11, 1e-5, worst);
+    ++tested;
+  }
+  EXPECT_GT(tested, kConfigs / 2);
+}
+
+// A CP and a box part: one contact per end section against the box face that leaves the most room;
+// its gradient in the nodes, the translation and the rotation is the row.
+TEST(GapFunction, BoxRowIsTheGradientOfTheGap) {
+  std::mt19937_64 rng(14);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  int tested = 0;
+  Real worst = 0;
+  for (int n = 0; n < kConfigs; ++n) {
+    const Vec3 t = randomUnit(rng);
+    const Vec3 c0 = 1.5e-3 * Vec3(u(rng), u(rng), u(rng));
+    Fabric f = randomPair(rng, c0 - 0.4e-3 * t, c0 + 0.4e-3 * t, Vec3(5e-3, 0, 0), Vec3(6e-3, 0, 0));
+    RigidBody b = randomBody(rng, false, Vec3::Zero());
+    BodyContact c[2];
+    const int m = bodyGap(f, 0, b, 0, 1.0, 1.0, SectionRule::ConstantArea, c);  // a huge reach: listed
+    ASSERT_EQ(m, 2);
+    for (int q = 0; q < m; ++q) {
+      // Away from a tie between two faces (where the face chosen would switch within the step).
+      BodyContact p = c[q];
+      bodyMatches(f, b, p, 1e-11, 1e-5, worst);
+      ++tested;
+    }
+  }
+  EXPECT_EQ(tested, 2 * kConfigs);
+}
+
+// The closest point of an ellipse against a dense sampling of its boundary (2e5 points), inside and
+// outside, for flat and round ellipses.
+TEST(GapFunction, ClosestPointOnAnEllipseMatchesADenseSampling) {
+  std::mt19937_64 rng(15);
+  std::uniform_real_distribution<Real> u(-1, 1), ratio(0.05, 1);
+  for (int n = 0; n < 200; ++n) {
+    const Real a = 1e-4, b = a * ratio(rng);
+    const bool swap = n % 2;
+    const Real A = swap ? b : a, B = swap ? a : b;
+    const Real px = 2e-4 * u(rng), py = 2e-4 * u(rng);
+    Real qx, qy;
+    const bool outside = closestOnEllipse(A, B, px, py, qx, qy);
+    EXPECT_EQ(outside, (px / A) * (px / A) + (py / B) * (py / B) >= 1);
+    EXPECT_NEAR((qx / A) * (qx / A) + (qy / B) * (qy / B), 1.0, 1e-9);
+    Real best = INFINITY;
+    for (int k = 0; k < 200000; ++k) {
+      const Real th = 2 * M_PI * k / 200000;
+      best = std::min(best, std::hypot(A * std::cos(th) - px, B * std::sin(th) - py));
+    }
+    EXPECT_NEAR(std::hypot(qx - px, qy - py), best, 1e-12 + 2e-9);  // sampling step ~3e-9 m
+    EXPECT_LE(std::hypot(qx - px, qy - py), best + 1e-15);
+  }
+}
+
+// A piece pushed through another keeps its side: g goes negative past the axis instead of growing
+// again (where the closest points lie inside both pieces); round the end of the other piece the
+// side may change.
+TEST(GapFunction, APiecePushedThroughKeepsItsSide) {
+  std::mt19937_64 rng(16);
+  Fabric f = randomPair(rng, Vec3(-0.4e-3, 0, 0), Vec3(0.4e-3, 0, 0), Vec3(0, -0.4e-3, 0.2e-3), Vec3(0, 0.4e-3, 0.2e-3));
+  CPContact c[2];
+  ASSERT_EQ(pairGaps(f, 0, 1, false, SectionRule::ConstantArea, nullptr, c), 1);
+  EXPECT_NEAR(c[0].normal.z(), 1.0, 1e-12);
+  const Real g0 = c[0].gap;
+  for (Index k : {2, 3}) f.pos[k].z() = -0.05e-3;  // B now 0.05 mm below A's axis
+  remeasure(f, c[0], SectionRule::ConstantArea, false);
+  EXPECT_NEAR(c[0].normal.z(), 1.0, 1e-12);
+  EXPECT_NEAR(c[0].gap, g0 - 0.25e-3, 1e-12);
+  // Round A's end: B beyond x = 0.4 mm, then below: the closest point of A is its end node.
+  for (Index k : {2, 3}) f.pos[k].x() = 0.9e-3;
+  remeasure(f, c[0], SectionRule::ConstantArea, false);
+  EXPECT_LT(c[0].normal.z(), 0);
+  EXPECT_GT(c[0].gap, 0);
+}
