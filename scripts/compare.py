@@ -5,7 +5,9 @@
 # scripts/smith.py for the single-yarn error) in its own YADE process, with its own summary.json.
 #
 # Methods (docs/compare.md):
-#   impulse          woven as the paper: geometric flattening up to the MCD, then impulses (Eq. 5)
+#   impulse          woven's default: gap functions with exact-gradient impulse rows and a position
+#                    projection (contact_model=gap; docs/collisions.md), geometric flattening up to the MCD
+#   paper            woven as the paper: SAT normal, depth on the sections, impulses (Eq. 5) (contact_model=paper)
 #   penalty          woven's OBB/SAT geometry, penalty forces k_p * overlap instead of impulses
 #   no_flattening    impulses, sections never flatten
 #   section_springs  flattening resisted by the section springs of the paper's Eq. 7, impulses past the MCD
@@ -40,7 +42,7 @@ p = read_params({
     'shape': ('sphere', '', "projectile: 'sphere' or 'box' (both models have both)"),
     'size': (3.0e-3, 'm', 'sphere diameter or cube edge'),
     'mass': (0.25e-3, 'kg', 'projectile mass'),
-    'methods': ('', '', 'comma-separated subset of impulse, penalty, no_flattening, section_springs, yade_grid (default: all)'),
+    'methods': ('', '', 'comma-separated subset of impulse, paper, penalty, no_flattening, section_springs, yade_grid (default: all)'),
     'timeout': (900, 's', 'longest a single run may take'),
     'out': ('', '', 'output folder (default out/compare)'),
 })
@@ -73,6 +75,7 @@ t_end = p.t_end or (15e-6 if p.quick else 30e-6)
 # Each method: its keys, the stiffness key it sweeps (None: no contact stiffness) and the values.
 METHODS = {
     'impulse': ({}, None, [None]),
+    'paper': ({'contact_model': 'paper'}, None, [None]),
     'penalty': ({'response': 'penalty'}, 'penalty_stiffness', [1e5, 1e6, 1e7]),
     'no_flattening': ({'flattening': 'none'}, None, [None]),
     'section_springs': ({'flattening': 'springs'}, 'section_stiffness', [1e3, 1e4, 1e5]),
@@ -85,7 +88,7 @@ if p.methods:
     METHODS = {m: METHODS[m] for m in METHODS if m in chosen}
 DT_KEY = {'yade_grid': 'dt_factor'}  # the others: 'safety' (fraction of the chain's dt_crit)
 SCENE = {'side': side, 't_end': t_end, 'V': p.V, 'shape': p.shape, 'size': p.size, 'mass': p.mass,
-         'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 50, 'energy_limit': 0.99}
+         'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 50, 'energy_limit': 0.99, 'overlap_limit': 100}
 if p.quick:
     RES, DTS, REF_RES = [1, 2, 4], [0.7], 4
     STIFF_KEEP = {'penalty': [1e6], 'section_springs': [1e4], 'yade_grid': [1e6, 1e7]}
@@ -302,7 +305,7 @@ if best_grid is not None:
 import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt
-MARK = {'impulse': ('o', 'C0'), 'penalty': ('s', 'C1'), 'no_flattening': ('^', 'C2'),
+MARK = {'impulse': ('o', 'C0'), 'paper': ('v', 'C4'), 'penalty': ('s', 'C1'), 'no_flattening': ('^', 'C2'),
         'section_springs': ('D', 'C3'), 'yade_grid': ('X', 'k')}
 fig, ax = plt.subplots(1, 3, figsize=(17, 5.2))
 panels = (('velocity_error', 'velocity-drop error vs reference', 1.0),
@@ -359,7 +362,8 @@ if p.map:
         M_K = {'penalty': [1e5, 1e6, 1e7, 1e8, 1e9], 'section_springs': [1e3, 1e4, 1e5, 1e6, 1e8],
                'yade_grid': [1e5, 1e6, 1e7, 1e8, 1e9]}
     MSCENE = {'side': 0.00635, 't_end': 8e-6, 'shape': 'sphere', 'size': 1.5e-3, 'mass': 0.05e-3,
-              'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 20, 'cp_per_span': 1, 'energy_limit': 0.99}
+              'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 20, 'cp_per_span': 1, 'energy_limit': 0.99,
+              'overlap_limit': 100}
     jobs = []
     for method, (extra, kkey, _) in METHODS.items():
         for k in (M_K.get(method, [None]) if kkey else [None]):

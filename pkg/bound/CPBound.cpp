@@ -9,9 +9,7 @@ namespace woven {
 void updateSectionFrames(Fabric& f, Vec3Array& tangent) {
   tangent.resize(f.pos.size());
   parallelFor(f.nNodes(), kParallelGrain, threads(), [&](Index k) {
-    const Yarn& y = f.yarns[f.nodeYarn[k]];
-    const Index n0 = y.firstNode, n1 = y.firstNode + y.nNodes - 1;
-    const Vec3 t = (f.pos[std::min(k + 1, n1)] - f.pos[std::max(k - 1, n0)]).normalized();
+    const Vec3 t = yarnTangentAt(f, k);
     tangent[k] = t;
     Vec3 d = f.secDir[k] - f.secDir[k].dot(t) * t;  // turn the section with the yarn
     const Real len = d.norm();

@@ -6,12 +6,26 @@
 #include "bound/OBB.hpp"
 #include "fabric/Fabric.hpp"
 #include "shape/Section.hpp"
+#include <algorithm>
 #include <vector>
 
 namespace woven {
 
-/// Unit tangent of every node (central difference of its neighbours; the end element at yarn ends)
-/// into `tangent`, and Fabric::secDir made unit and normal to it (the section turns with the yarn).
+/// Unit tangent of the yarn at node k: the central difference of its neighbours, or its one live
+/// element at a yarn end or beside a broken element (whose far node, flying off with the other
+/// piece, says nothing about this one's direction).
+inline Vec3 yarnTangentAt(const Fabric& f, Index k) {
+  const Yarn& y = f.yarns[f.nodeYarn[k]];
+  const Index local = k - y.firstNode;
+  const bool before = local > 0 && f.alive[y.firstElem + local - 1];
+  const bool after = local < y.nElems && f.alive[y.firstElem + local];
+  const Index a = before || !after ? std::max(k - 1, y.firstNode) : k;
+  const Index b = after || !before ? std::min(k + 1, y.firstNode + y.nNodes - 1) : k;
+  return (f.pos[b] - f.pos[a]).normalized();
+}
+
+/// Unit tangent of every node (yarnTangentAt) into `tangent`, and Fabric::secDir made unit and
+/// normal to it (the section turns with the yarn).
 void updateSectionFrames(Fabric& f, Vec3Array& tangent);
 
 /// OBB of CP e with its sections as they are, enlarged by margin [m] on every side.

@@ -43,7 +43,15 @@ Real CollisionStage::capacityOne(const Fabric& f, const CPContact& c, bool sideB
   const Index e = sideB ? c.cpB : c.cpA;
   if (c.kind == ContactKind::Paper) return flatteningCapacity(f, tangent_, e, c.normal, params_, flat);
   return flatteningCapacityAt(f, tangent_, e, sideB ? c.sB : c.sA, sideB ? Vec3(-c.hDir) : c.hDir,
-                              c.kind == ContactKind::Cross, params_, flat);
+                              c.kind == ContactKind::Cross && crossesSteeply(f, c), params_, flat);
+}
+
+// A gap contact whose measure is mostly the half-thickness (pieces crossing at more than 32.5
+// degrees, half way through the blend of GapFunction's thicknessWeight): it flattens b itself.
+bool CollisionStage::crossesSteeply(const Fabric& f, const CPContact& c) const {
+  const Vec3 tA = (f.pos[f.elem0[c.cpA] + 1] - f.pos[f.elem0[c.cpA]]).normalized();
+  const Vec3 tB = (f.pos[f.elem0[c.cpB] + 1] - f.pos[f.elem0[c.cpB]]).normalized();
+  return std::abs(tA.dot(tB)) < 0.84339144581288572;  // cos 32.5 degrees
 }
 
 BroadPhase broadPhaseByName(const std::string& name) {
@@ -70,11 +78,14 @@ void CollisionStage::refit(Fabric& f, Real dt) {
   if (filter_.yarnExclude.size() != f.yarns.size()) filter_.configure(f, params_.selfExclude);
   updateSectionFrames(f, tangent_);
   refitBounds(f, tangent_, params_.rule, params_.margin, bounds_);
-  // Each CP's broad-phase box grows by the farthest its nodes can drift in the step.
+  // Each CP's broad-phase box grows by the farthest its nodes can drift in the step, and (gap model)
+  // be moved by the position projection after it.
   grow_.resize(bounds_.size());
+  const Real projected =
+      dt > 0 && params_.projectionSweepCount() > 0 ? kProjectionTravel * params_.projectionMaxMove : 0.0;
   parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
     const Index i = f.elem0[e];
-    grow_[e] = dt * std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm()));
+    grow_[e] = dt * std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm())) + projected;
   });
   growBoxes(bounds_, grow_, grown_);
 }
@@ -177,6 +188,10 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
   const bool caching = params_.cacheDistance > 0 && params_.flattening != Flattening::Springs &&
                        params_.model == ContactModel::Paper;
   const bool gapModel = params_.model == ContactModel::Gap;
+  // Pairs the position projection may move together (each node at most kProjectionTravel x
+  // projectionMaxMove) are listed too.
+  const Real projectionReach =
+      dt > 0 && params_.projectionSweepCount() > 0 ? kProjectionTravel * params_.projectionMaxMove : 0.0;
   // Fixed chunks of the sorted pairs (threads take them in any order), concatenated in chunk order:
   // the same contacts in the same order for any thread count (each pair's cache entry is its own).
   constexpr Index kPairChunk = 512;
@@ -210,8 +225,9 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         const int m = pairGaps(f, pr.a, pr.b, side, params_.rule, pc.memo ? &pc.memoNormal : nullptr, two);
         pc.memo = true, pc.side = side, pc.memoNormal = two[0].normal;
         const Index i = f.elem0[pr.a], j = f.elem0[pr.b];
-        const Real reach = params_.margin + dt * (std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm())) +
-                                                  std::sqrt(std::max(f.vel[j].squaredNorm(), f.vel[j + 1].squaredNorm())));
+        const Real reach = params_.margin + 2 * projectionReach +
+                           dt * (std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm())) +
+                                 std::sqrt(std::max(f.vel[j].squaredNorm(), f.vel[j + 1].squaredNorm())));
         for (int q = 0; q < m; ++q)
           if (two[q].gap <= reach) out.push_back(two[q]);
         continue;
@@ -297,7 +313,7 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
         flattenCP(f, tangent_, c.cpA, c.normal, dA, params_, flatBefore_, dirSum_);
         flattenCP(f, tangent_, c.cpB, c.normal, dB, params_, flatBefore_, dirSum_);
       } else {  // the gap model measures at the contact point: flatten there
-        const bool thickness = c.kind == ContactKind::Cross;
+        const bool thickness = c.kind == ContactKind::Cross && crossesSteeply(f, c);
         flattenAt(f, tangent_, c.cpA, c.sA, c.hDir, thickness, dA, params_, flatBefore_, dirSum_);
         flattenAt(f, tangent_, c.cpB, c.sB, Vec3(-c.hDir), thickness, dB, params_, flatBefore_, dirSum_);
       }

@@ -149,6 +149,7 @@ class CollisionStage : public StepHook {
   void narrowBodies(const Fabric& f, Real dt);
   int flatten(Fabric& f, int maxPasses);
   std::function<Real(const CPContact&)> capacityOf(const Fabric& f) const;
+  bool crossesSteeply(const Fabric& f, const CPContact& c) const;
   Real capacityOne(const Fabric& f, const CPContact& c, bool sideB, const std::vector<Real>* flat = nullptr) const;
   void restoreSections(Fabric& f);
   Real addSectionSprings(const Fabric& f);

@@ -1,4 +1,5 @@
 #include "geom/GapFunction.hpp"
+#include "bound/CPBound.hpp"
 #include "geom/SegmentDistance.hpp"
 #include <algorithm>
 #include <cmath>
@@ -36,18 +37,11 @@ void orientNormal(const Vec3& d, const Vec3* orient, bool interior, const Vec3& 
   if (n.dot(centres) < 0) n = -n;
 }
 
-// Unit tangent of the yarn at node k (central difference, as the section frames: bound/CPBound).
-Vec3 nodeTangent(const Fabric& f, Index k) {
-  const Yarn& y = f.yarns[f.nodeYarn[k]];
-  const Index n0 = y.firstNode, n1 = y.firstNode + y.nNodes - 1;
-  return (f.pos[std::min(k + 1, n1)] - f.pos[std::max(k - 1, n0)]).normalized();
-}
-
 // The yarn's tangent at s along CP e: its node tangents interpolated. At a crossing node of a
 // crimped yarn it is level where the chord is tilted by the crimp angle.
 Vec3 yarnTangent(const Fabric& f, Index e, Real s) {
   const Index i = f.elem0[e];
-  return ((1 - s) * nodeTangent(f, i) + s * nodeTangent(f, i + 1)).normalized();
+  return ((1 - s) * yarnTangentAt(f, i) + s * yarnTangentAt(f, i + 1)).normalized();
 }
 
 // Direction the sections' supports are measured along. The chords' common normal n leans by the
@@ -71,6 +65,14 @@ Vec3 supportDirection(const Vec3& n, const Vec3& tA, const Vec3& tB, bool side) 
   }
   const Vec3 p = n - n.dot(tA) * tA;
   return p.norm() > 1e-9 ? Vec3(p.normalized()) : n;
+}
+
+// Weight of the half-thickness in a CP pair's section measure: 1 where the yarns cross at 45
+// degrees or more, 0 at kSideEnterDeg or less (side by side: the supports), linear between.
+Real thicknessWeight(const Vec3& tA, const Vec3& tB) {
+  static const Real lo = kSideEnterDeg * kPi / 180, hi = 45 * kPi / 180;
+  const Real angle = std::acos(std::min(Real(1), std::abs(tA.dot(tB))));
+  return std::clamp((angle - lo) / (hi - lo), Real(0), Real(1));
 }
 
 // The section of CP e at s in the yarn's own plane (normal to yarnTangent), for the supports.
@@ -97,8 +99,12 @@ void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kin
   if (sections) {
     const SectionAt qa = yarnSection(f, a, s, rule), qb = yarnSection(f, b, t, rule);
     c.hDir = supportDirection(n, qa.t, qb.t, kind == ContactKind::Side);
-    if (kind == ContactKind::Cross) c.hA = qa.b, c.hB = qb.b;  // half-thicknesses (see GapFunction.hpp)
-    else c.hA = support(qa, c.hDir), c.hB = support(qb, c.hDir);
+    // Half-thicknesses where the pieces cross at more than 45 degrees, supports along hDir (widths
+    // where the ribbons meet edge to edge) below 20, blended between: g must not jump where a pair
+    // turns from crossing to side by side (see GapFunction.hpp).
+    const Real lambda = thicknessWeight(qa.t, qb.t);
+    c.hA = lambda * qa.b + (1 - lambda) * support(qa, c.hDir);
+    c.hB = lambda * qb.b + (1 - lambda) * support(qb, c.hDir);
   }
   c.cpA = a, c.cpB = b, c.kind = kind;
   c.sA = s, c.sB = t;
@@ -283,7 +289,7 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
   const OBB box = body.partBox(part);
   Vec3 u[2], d[2];
   SemiAxes ax[2];
-  for (int k = 0; k < 2; ++k) nodeFrame(f, i + k, nodeTangent(f, i + k), rule, u[k], d[k], ax[k]);
+  for (int k = 0; k < 2; ++k) nodeFrame(f, i + k, yarnTangentAt(f, i + k), rule, u[k], d[k], ax[k]);
   Real best = -INFINITY;
   for (int j = 0; j < 6; ++j) {
     const Vec3 n = (j < 3 ? 1.0 : -1.0) * box.axes.col(j % 3);

@@ -42,8 +42,10 @@ struct ContactParams {
   int projectionSweeps = -1;
   /// Overlap the projection leaves alone [m] >= 0 (Box2D's linear slop).
   Real projectionSlop = 0.5e-6;
-  /// Most of a contact's overlap one projection move closes [m] > 0 (Box2D's maxLinearCorrection).
-  /// 10 um, a tenth of a KM2 yarn's thickness: 150 m/s over the ballistic scene's step.
+  /// Most one contact moves a node in a position projection [m] > 0 (Box2D's maxLinearCorrection;
+  /// a node moves at most kProjectionTravel times this in all, and pairs that much closer than the
+  /// step's motion allows are listed as contacts, so a move never carries a node into an unlisted
+  /// neighbour). 10 um, a tenth of a KM2 yarn's thickness.
   Real projectionMaxMove = 10e-6;
   /// The sweeps the projection makes with these parameters.
   int projectionSweepCount() const {

@@ -27,7 +27,19 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
   // After the first sweep only the contacts with a node (or a body) moved in the sweep before can
   // have changed: the others are skipped (most of a ply is at rest).
   movedNow_.assign(f.nNodes(), 0);
+  travel_.assign(f.nNodes(), 0);
   bool bodyMoved = true;
+  // The share of a move that moves no node more than maxMove, nor any node more than
+  // kTravel x maxMove in all: moves beyond would carry a node into neighbours no contact was listed
+  // for (the stage lists the pairs within that much more than the step's motion).
+  const auto share = [&](const Index* node, const Real* w, int n, Real dl) {
+    Real scale = 1;
+    for (int k = 0; k < n; ++k) {
+      const Real step = std::abs(w[k] * f.invMass[node[k]] * dl);
+      if (step > 0) scale = std::min(scale, std::min(maxMove, std::max(Real(0), kProjectionTravel * maxMove - travel_[node[k]])) / step);
+    }
+    return scale * dl;
+  };
   const auto movedBefore = [&](Index k) { return movedBefore_[k] != 0; };
   for (int sweep = 0; sweep < sweeps; ++sweep) {
     ++rep.sweeps;
@@ -51,11 +63,14 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
       Real K = 0;
       for (int k = 0; k < 4; ++k) K += w[k] * w[k] * f.invMass[node[k]];
       if (!(K > 0)) continue;  // both CPs kinematic
-      const Real dl = std::min(-C, maxMove) / K;  // at most maxMove closed per contact and sweep
+      const Real dl = share(node, w, 4, -C / K);
+      if (dl == 0) continue;
       for (int k = 0; k < 4; ++k)
         if (w[k] != 0 && f.invMass[node[k]] > 0) {
           touch(node[k]);
-          f.pos[node[k]] += (w[k] * f.invMass[node[k]] * dl) * c.normal;
+          const Real step = w[k] * f.invMass[node[k]] * dl;
+          f.pos[node[k]] += step * c.normal;
+          travel_[node[k]] += std::abs(step);
           movedNow_[node[k]] = 1;
         }
       ++rep.pushed;
@@ -77,11 +92,14 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
       Real K = b.invMass() + rn.dot(invI * rn);
       for (int k = 0; k < 2; ++k) K += w[k] * w[k] * f.invMass[node[k]];
       if (!(K > 0)) continue;  // kinematic CP and body
-      const Real dl = std::min(-C, maxMove) / K;  // at most maxMove closed per contact and sweep
+      const Real dl = share(node, w, 2, -C / K);
+      if (dl == 0) continue;
       for (int k = 0; k < 2; ++k)
         if (w[k] != 0 && f.invMass[node[k]] > 0) {
           touch(node[k]);
-          f.pos[node[k]] += (w[k] * f.invMass[node[k]] * dl) * c.normal;
+          const Real step = w[k] * f.invMass[node[k]] * dl;
+          f.pos[node[k]] += step * c.normal;
+          travel_[node[k]] += std::abs(step);
           movedNow_[node[k]] = 1;
         }
       if (b.dynamic()) {

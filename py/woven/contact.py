@@ -32,7 +32,7 @@ CONTACT_KEYS = {
     'projection_sweeps': (-1, '', 'sweeps of the position projection after the drift (it stops once nothing moves), [0, 50]; -1: auto (8 with contact_model=gap '
                           'and response=impulse, else 0); >= 1 is refused with contact_model=paper or response=penalty'),
     'projection_slop': (0.5e-6, 'm', 'overlap the position projection leaves alone, in [0, 1e-3]'),
-    'projection_max_move': (10e-6, 'm', 'most of a contact\'s overlap one projection move closes, in (0, 1e-3] (deep overlaps go out over a few steps)'),
+    'projection_max_move': (10e-6, 'm', 'most one contact moves a node in the position projection (3x this in all), in (0, 1e-3] (deep overlaps go out over a few steps)'),
     'yarn_contacts': (True, '', 'contacts between yarns (False: only with rigid bodies; yarns pass through each other)'),
 }
 
