@@ -82,8 +82,8 @@ inline AxisTerms eberlyEdge(int i, int j, const OBB& a, const OBB& b, const Fram
 }
 
 // The exact form for a near-parallel A_i x B_j (|c_ij| > kExactCos); L is returned for the normal and
-// the moving test.
-inline AxisTerms exactEdge(int i, int j, const OBB& a, const OBB& b, const Vec3& D, Vec3& L) {
+// the moving test. Out of line: it keeps the loops over Eberly's forms small.
+[[gnu::noinline]] AxisTerms exactEdge(int i, int j, const OBB& a, const OBB& b, const Vec3& D, Vec3& L) {
   L = accurateCross(a.axis(i), b.axis(j));
   const Real len = L.norm();
   if (!(len >= kParallel)) return {0, 0, 0, 0, 0};
@@ -129,10 +129,11 @@ int clipPolygon(const Vec3* in, int n, const Vec3& nrm, Real d, Vec3* out) {
 // plane: onI is the vertex on I, onR the lifted point on R, depth the distance lifted. For a face
 // axis n is the face normal and the prism's sides are R's side faces. For any other n (degenerate
 // edge-edge contacts) the sides contain n, so the points still lie on both surfaces, and as
-// depth <= the overlap on n, each lies within `depth` of the other box. Points shallower than
-// `keep` are dropped; depths are reported no lower than -slop.
+// depth <= the overlap on n, each lies within `depth` of the other box. The prism is grown by `grow`:
+// boxes that touch within the allowance sideways too (corner to corner) still give their point.
+// Points shallower than `keep` are dropped; depths are reported no lower than -slop.
 int clipContact(const OBB& R, int r, const Vec3& n, bool faceAxis, const OBB& I, BoxContactPoint* pts, bool refIsA,
-                Real keep, Real slop) {
+                Real keep, Real slop, Real grow) {
   const Vec3 nR = sgn(R.axis(r).dot(n)) * R.axis(r);  // outward normal of the reference face
   const Real plane = nR.dot(R.centre) + R.extent[r], lift = 1 / nR.dot(n);  // nR.n >= 1/sqrt(3)
   int j = 0;
@@ -155,7 +156,7 @@ int clipContact(const OBB& R, int r, const Vec3& n, bool faceAxis, const OBB& I,
     const int p = (r + k) % 3, q = (r + 3 - k) % 3;  // the sides +-e_p A_p, along A_q
     Vec3 side = R.axis(p);
     if (!faceAxis) side = R.axis(q).cross(n), side *= sgn(side.dot(R.axis(p)));
-    const Real c = side.dot(faceCentre), h = R.extent[p] * side.dot(R.axis(p));
+    const Real c = side.dot(faceCentre), h = (R.extent[p] + grow) * side.dot(R.axis(p));
     m = clipPolygon(src, m, side, c + h, dst);
     std::swap(src, dst);
     m = clipPolygon(src, m, Vec3(-side), -c + h, dst);
@@ -177,6 +178,27 @@ int clipContact(const OBB& R, int r, const Vec3& n, bool faceAxis, const OBB& I,
 
 }  // namespace
 
+namespace {
+// Edge axis A_i x B_j of obbOverlap: apart by more than the allowance along the unit axis?
+// (Indices are template arguments so that the nine tests unroll with constant indices.)
+template <int i, int j>
+inline bool edgeApart(const OBB& a, const OBB& b, const Frame& f, Real pad2) {
+  constexpr int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+  const Mat3& M = f.absC;
+  if (M(i, j) > kExactCos) {
+    Vec3 L;
+    const AxisTerms t = exactEdge(i, j, a, b, f.D, L);
+    return std::abs(t.s) - t.Rsum > t.len * f.pad;
+  }
+  const Vec3 &ea = a.extent, &eb = b.extent;
+  const Real c1 = f.C(i1, j), c2 = f.C(i2, j);
+  // gap > |L| pad, squared to spare the root
+  const Real gap = std::abs(c1 * f.AD[i2] - c2 * f.AD[i1]) -
+                   (ea[i1] * M(i2, j) + ea[i2] * M(i1, j) + eb[j1] * M(i, j2) + eb[j2] * M(i, j1));
+  return gap > 0 && gap * gap > (c1 * c1 + c2 * c2) * pad2;
+}
+}  // namespace
+
 bool obbOverlap(const OBB& a, const OBB& b) {
   // Same 15 tests as obbContact, written out so the yes/no answer costs no more than the test itself.
   const Frame f(a, b);
@@ -187,24 +209,9 @@ bool obbOverlap(const OBB& a, const OBB& b) {
   for (int j = 0; j < 3; ++j)
     if (std::abs(f.BD[j]) > ea[0] * M(0, j) + ea[1] * M(1, j) + ea[2] * M(2, j) + eb[j] + f.pad) return false;
   const Real pad2 = f.pad * f.pad;
-  for (int i = 0; i < 3; ++i) {
-    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-    for (int j = 0; j < 3; ++j) {
-      if (M(i, j) > kExactCos) {
-        Vec3 L;
-        const AxisTerms t = exactEdge(i, j, a, b, f.D, L);
-        if (std::abs(t.s) - t.Rsum > t.len * f.pad) return false;
-        continue;
-      }
-      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-      const Real c1 = f.C(i1, j), c2 = f.C(i2, j);
-      // apart by more than pad along the unit axis: gap > |L| pad, squared to spare the root
-      const Real gap = std::abs(c1 * f.AD[i2] - c2 * f.AD[i1]) -
-                       (ea[i1] * M(i2, j) + ea[i2] * M(i1, j) + eb[j1] * M(i, j2) + eb[j2] * M(i, j1));
-      if (gap > 0 && gap * gap > (c1 * c1 + c2 * c2) * pad2) return false;
-    }
-  }
-  return true;
+  return !(edgeApart<0, 0>(a, b, f, pad2) || edgeApart<0, 1>(a, b, f, pad2) || edgeApart<0, 2>(a, b, f, pad2) ||
+           edgeApart<1, 0>(a, b, f, pad2) || edgeApart<1, 1>(a, b, f, pad2) || edgeApart<1, 2>(a, b, f, pad2) ||
+           edgeApart<2, 0>(a, b, f, pad2) || edgeApart<2, 1>(a, b, f, pad2) || edgeApart<2, 2>(a, b, f, pad2));
 }
 
 namespace {
@@ -248,13 +255,13 @@ BoxContact obbContact(const OBB& a, const OBB& b, Real slop, Real lateralCos, bo
   out.normal = n;
   if (!points) return out;
   // Points no shallower than the TD itself (which may lie within the allowance below -slop).
-  const Real keep = std::min(bestDepth, -slop) - f.pad;
+  const Real keep = std::min(bestDepth, -slop) - f.pad, grow = slop + 2 * f.pad;
   if (best < 3) {
-    out.nPoints = clipContact(a, best, n, true, b, out.points.data(), true, keep, slop);
+    out.nPoints = clipContact(a, best, n, true, b, out.points.data(), true, keep, slop, grow);
     return out;
   }
   if (best < 6) {
-    out.nPoints = clipContact(b, best - 3, -n, true, a, out.points.data(), false, keep, slop);
+    out.nPoints = clipContact(b, best - 3, -n, true, a, out.points.data(), false, keep, slop, grow);
     return out;
   }
   // Edge-edge: the closest points of the two support edges (Eberly). When the support is not an
@@ -282,8 +289,8 @@ BoxContact obbContact(const OBB& a, const OBB& b, Real slop, Real lateralCos, bo
   const Vec3 an = (a.axes.transpose() * n).cwiseAbs(), bn = (b.axes.transpose() * n).cwiseAbs();
   int ka, kb;
   an.maxCoeff(&ka), bn.maxCoeff(&kb);
-  out.nPoints = an[ka] >= bn[kb] ? clipContact(a, ka, n, false, b, out.points.data(), true, keep, slop)
-                                 : clipContact(b, kb, -n, false, a, out.points.data(), false, keep, slop);
+  out.nPoints = an[ka] >= bn[kb] ? clipContact(a, ka, n, false, b, out.points.data(), true, keep, slop, grow)
+                                 : clipContact(b, kb, -n, false, a, out.points.data(), false, keep, slop, grow);
   return out;
 }
 
@@ -292,12 +299,15 @@ SweptContact obbFirstContact(const OBB& a, const Vec3& va, const OBB& b, const V
   // projections overlap while |s(t)| <= R0 + R1 (+ the allowance, as in the static test). The boxes
   // touch first at the latest entry time over the 15 axes, provided it precedes the earliest exit
   // time (Eberly, dynamic SAT). s, w and the radii are all scaled by the same |L| (the same terms as
-  // obbContact), so the times are those of the unit axis.
+  // obbContact), so the times are those of the unit axis. The yes/no answer uses the allowance; the
+  // time is the exact boxes' (no allowance) when they do meet, so it is exact to round-off instead
+  // of early by kAxisEpsilon * size / speed.
   SweptContact out;
   const Frame f(a, b);
   const Vec3 W = vb - va;
   const Vec3 AW = a.axes.transpose() * W, BW = b.axes.transpose() * W;
-  Real tFirst = -INFINITY, tLast = INFINITY;
+  Real tFirst = -INFINITY, tLast = INFINITY, exactFirst = -INFINITY, exactLast = INFINITY;
+  bool exactApart = false;  // the boxes without the allowance are apart on an axis they do not move along
   for (int k = 0; k < 15; ++k) {
     AxisTerms t;
     Real w;
@@ -320,16 +330,20 @@ SweptContact obbFirstContact(const OBB& a, const Vec3& va, const OBB& b, const V
     const Real Rsum = t.Rsum + t.len * f.pad, s0 = t.s;
     if (w == 0) {
       if (std::abs(s0) > Rsum) return out;  // separated for all t on this axis
+      exactApart |= std::abs(s0) > t.Rsum;
       continue;
     }
-    Real t1 = (-Rsum - s0) / w, t2 = (Rsum - s0) / w;
-    if (t1 > t2) std::swap(t1, t2);
+    Real t1 = (-Rsum - s0) / w, t2 = (Rsum - s0) / w, e1 = (-t.Rsum - s0) / w, e2 = (t.Rsum - s0) / w;
+    if (t1 > t2) std::swap(t1, t2), std::swap(e1, e2);
     tFirst = std::max(tFirst, t1);
     tLast = std::min(tLast, t2);
+    exactFirst = std::max(exactFirst, e1);
+    exactLast = std::min(exactLast, e2);
     if (tFirst > tLast || tFirst > dt || tLast < 0) return out;
   }
   out.hit = true;
-  out.time = std::max(tFirst, Real(0));
+  const bool meet = !exactApart && exactFirst <= exactLast && exactFirst <= dt && exactLast >= 0;
+  out.time = std::max(meet ? exactFirst : tFirst, Real(0));
   OBB a1 = a, b1 = b;
   a1.centre += va * out.time;
   b1.centre += vb * out.time;

@@ -35,6 +35,7 @@
 #include "geom/SeparatingAxis.hpp"
 #include <gtest/gtest.h>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 using namespace woven;
@@ -52,10 +53,9 @@ inline Q dot(const QV& a, const QV& b) { return a.x * b.x + a.y * b.y + a.z * b.
 inline QV cross(const QV& a, const QV& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 inline QV scaled(const QV& a, Q s) { return {a.x * s, a.y * s, a.z * s}; }
 inline Q qabs(Q x) { return x < 0 ? -x : x; }
-inline Q qsqrt(Q x) {  // a double seed (53 bits) and two Newton steps: all 113 bits
+inline Q qsqrt(Q x) {  // a double seed (relative error 1e-16) and one Newton step: 1e-32
   if (!(x > 0)) return 0;
-  Q y = std::sqrt(static_cast<double>(x));
-  y = (y + x / y) / 2;
+  const Q y = std::sqrt(static_cast<double>(x));
   return (y + x / y) / 2;
 }
 constexpr Real kHuge = 1e300;
@@ -88,6 +88,22 @@ struct Oracle {
     n = scaled(n, 1 / qsqrt(dot(n, n)));
     return radii(n) - dot(n, D);
   }
+  // The same boxes (axes and extents) at other centres, moving at the relative velocity W: only the
+  // projections of D and W change.
+  void place(const OBB& a, const OBB& b, const Vec3& Wd) {
+    const QV ca = qv(a.centre), cb = qv(b.centre);
+    D = {cb.x - ca.x, cb.y - ca.y, cb.z - ca.z};
+    W = qv(Wd);
+    depth = kHuge, best = -1;
+    for (int k = 0; k < 15; ++k) {
+      OracleAxis& x = ax[k];
+      if (!x.valid) continue;
+      x.s = dot(x.n, D);
+      x.w = dot(x.n, W);
+      const Q d = x.r - qabs(x.s);
+      if (d < depth) depth = d, best = k;
+    }
+  }
   // Over t in [T0, T1] the boxes grown by delta [m] along every axis overlap for t in
   // [lo, hi] (the 15 per-axis intervals |s + w t| <= r + delta intersected): false if empty.
   bool moving(Q delta, Q T0, Q T1, Q* tFirst) const {
@@ -114,9 +130,6 @@ Oracle oracle(const OBB& a, const OBB& b, const Vec3& W = Vec3::Zero()) {
   Oracle o;
   for (int k = 0; k < 3; ++k) o.A[k] = qv(a.axis(k)), o.B[k] = qv(b.axis(k));
   o.ea = a.extent, o.eb = b.extent;
-  const QV ca = qv(a.centre), cb = qv(b.centre);
-  o.D = {cb.x - ca.x, cb.y - ca.y, cb.z - ca.z};
-  o.W = qv(W);
   for (int k = 0; k < 15; ++k) {
     const QV L = k < 3 ? o.A[k] : k < 6 ? o.B[k - 3] : cross(o.A[(k - 6) / 3], o.B[(k - 6) % 3]);
     const Q len2 = dot(L, L);
@@ -124,12 +137,9 @@ Oracle oracle(const OBB& a, const OBB& b, const Vec3& W = Vec3::Zero()) {
     if (!(len2 > 0)) continue;  // exactly parallel edges: not an axis
     x.valid = true;
     x.n = scaled(L, 1 / qsqrt(len2));
-    x.s = dot(x.n, o.D);
-    x.w = dot(x.n, o.W);
     x.r = o.radii(x.n);
-    const Q depth = x.r - qabs(x.s);
-    if (depth < o.depth) o.depth = depth, o.best = k;
   }
+  o.place(a, b, W);
   return o;
 }
 
@@ -178,19 +188,22 @@ struct Gen {
 // B's radius along A's axis k.
 Real radiusAlong(const OBB& b, const Vec3& n) { return (b.axes.transpose() * n).cwiseAbs().dot(b.extent); }
 
-// Moves b along the oracle's minimum axis so that the depth along it becomes `depth` (the minimum
-// can then only be there or shallower).
-void setDepth(const OBB& a, OBB& b, Real depth) {
-  const Oracle o = oracle(a, b);
-  Vec3 n = toVec(o.ax[o.best].n);
-  if (o.ax[o.best].s < 0) n = -n;
-  b.centre += static_cast<double>(o.depth - Q(depth)) * n;
-}
-
 struct Pair {
   OBB a, b;
   Kind kind;
+  Oracle o;  // of (a, b)
+  bool exact = false;
 };
+
+// Moves b along the oracle's minimum axis so that the depth along it becomes `depth` (the minimum
+// can then only be there or shallower).
+void setDepth(Pair& p, Real depth) {
+  p.o = oracle(p.a, p.b);
+  const OracleAxis& x = p.o.ax[p.o.best];
+  p.b.centre += static_cast<double>(p.o.depth - Q(depth)) * (x.s < 0 ? -1.0 : 1.0) * toVec(x.n);
+  p.o.place(p.a, p.b, Vec3::Zero());
+  p.exact = true;
+}
 
 Pair makePair(Gen& g, Kind kind) {
   Pair p;
@@ -203,7 +216,7 @@ Pair makePair(Gen& g, Kind kind) {
       a.extent = g.anyExtent(), b.extent = g.anyExtent();
       const Vec3 reach = a.extent + b.extent;
       b.centre = a.centre + Vec3(g.uni(-1, 1) * reach.maxCoeff(), g.uni(-1, 1) * reach.maxCoeff(), g.uni(-1, 1) * reach.maxCoeff());
-      if (g.uni(0, 1) < 0.3) setDepth(a, b, g.target(0.2));
+      if (g.uni(0, 1) < 0.3) setDepth(p, g.target(0.2));
       break;
     }
     case NearParallel: {
@@ -221,7 +234,7 @@ Pair makePair(Gen& g, Kind kind) {
         local[k] = g.sign() * reach * (k == i ? g.uni(0, 1) : g.uni(0, 1) < 0.5 ? 1.0 : g.uni(0.7, 1.02));
       }
       b.centre = a.centre + a.axes * local;
-      if (g.uni(0, 1) < 0.7) setDepth(a, b, g.target(0.2));
+      if (g.uni(0, 1) < 0.7) setDepth(p, g.target(0.2));
       break;
     }
     case Tie: {
@@ -237,7 +250,7 @@ Pair makePair(Gen& g, Kind kind) {
         local[k] = k == m ? g.sign() * reach : g.uni(-0.9, 0.9) * reach;
       }
       b.centre = a.centre + a.axes * local;
-      setDepth(a, b, g.target(0.5));
+      setDepth(p, g.target(0.5));
       break;
     }
     case YarnCross: {
@@ -253,7 +266,7 @@ Pair makePair(Gen& g, Kind kind) {
       b.axes = R0 * g.aboutLocal(2, M_PI / 2 + angle()) * g.aboutLocal(1, angle());
       const Vec3 local(g.uni(-0.2e-3, 0.2e-3), g.uni(-0.2e-3, 0.2e-3), a.extent[2] + b.extent[2]);
       b.centre = a.centre + R0 * local;
-      setDepth(a, b, g.uni(0, 1) < 0.5 ? g.uni(0, 45e-6) : g.target(0));
+      setDepth(p, g.uni(0, 1) < 0.5 ? g.uni(0, 45e-6) : g.target(0));
       break;
     }
     default: {  // YarnSide: neighbouring parallel yarns touching along their width
@@ -263,10 +276,11 @@ Pair makePair(Gen& g, Kind kind) {
       const Vec3 local(g.uni(-1, 1) * (a.extent[0] + b.extent[0]), g.sign() * (a.extent[1] + b.extent[1]),
                        g.uni(-0.5, 0.5) * (a.extent[2] + b.extent[2]));
       b.centre = a.centre + a.axes * local;
-      if (g.uni(0, 1) < 0.7) setDepth(a, b, g.target(0.2));
+      if (g.uni(0, 1) < 0.7) setDepth(p, g.target(0.2));
       break;
     }
   }
+  if (!p.exact) p.o = oracle(a, b);
   return p;
 }
 
@@ -276,11 +290,15 @@ struct Tally {
   const char* what;
   long fails[nKinds] = {};
   long checked = 0;
-  double worst = 0;  // largest violation, in units of the tolerance
-  std::string example;
+  double worst = 0;    // largest violation, in units of the tolerance
+  double largest = 0;  // largest excess among the passes (their margin; 0 for yes/no checks)
+  std::string example, largestExample;
   void check(bool ok, Kind kind, double excess, const std::string& detail) {
     ++checked;
-    if (ok) return;
+    if (ok) {
+      if (excess > largest) largest = excess, largestExample = detail;
+      return;
+    }
     ++fails[kind];
     if (excess > worst || example.empty()) worst = excess, example = detail;
   }
@@ -290,7 +308,7 @@ struct Tally {
     return n;
   }
   void print() const {
-    std::printf("  %-22s %7ld failed of %8ld checked", what, total(), checked);
+    std::printf("  %-24s %7ld failed of %8ld checked, largest %.3g of the tolerance", what, total(), checked, largest);
     if (total()) {
       std::printf("  (");
       for (int k = 0; k < nKinds; ++k)
@@ -298,6 +316,7 @@ struct Tally {
       std::printf(" )\n      worst: %s", example.c_str());
     }
     std::printf("\n");
+    if (std::getenv("SAT_ORACLE_VERBOSE") && largest > 0) std::printf("      largest: %s\n", largestExample.c_str());
   }
 };
 
@@ -318,7 +337,7 @@ constexpr Real kTimeTol = 1e-9;   // of dt
 Real sizeOf(const OBB& a, const OBB& b) { return a.extent.sum() + b.extent.sum(); }
 
 void checkPoints(Tally& t, const OBB& a, const OBB& b, const BoxContact& c, Kind kind, long id) {
-  double excess = c.nPoints > 0 ? 0 : 1;
+  double excess = c.nPoints > 0 ? 0 : 2;  // none: fails
   for (int i = 0; i < c.nPoints; ++i) {
     const BoxContactPoint& p = c.points[i];
     const Real allowed = std::abs(c.depth) + kPointTol;
@@ -341,7 +360,7 @@ TEST(SatOracle, StaticPairsMatchTheExactOracle) {
   for (long id = 0; id < pairs; ++id) {
     const Pair p = makePair(g, Kind(id % nKinds));
     const OBB &a = p.a, &b = p.b;
-    const Oracle o = oracle(a, b);
+    const Oracle& o = p.o;
     const Real d = static_cast<double>(o.depth), size = sizeOf(a, b);
     const BoxContact c = obbContact(a, b);
     const bool yes = obbOverlap(a, b);
@@ -349,10 +368,10 @@ TEST(SatOracle, StaticPairsMatchTheExactOracle) {
     inBand += band;
     if (!band) {
       const double excess = -d / size / kBand;  // separation in units of the band
-      verdict.check(c.overlap == (d > 0), p.kind, std::abs(excess),
+      verdict.check(c.overlap == (d > 0), p.kind, c.overlap == (d > 0) ? 0 : std::abs(excess),
                     fmt("pair %.0f: exact depth %.4g m (%.3g x size), obbContact says %.0f, axis %.0f", id, d, d / size,
                         c.overlap, c.axis));
-      overlapVerdict.check(yes == (d > 0), p.kind, std::abs(excess),
+      overlapVerdict.check(yes == (d > 0), p.kind, yes == (d > 0) ? 0 : std::abs(excess),
                            fmt("pair %.0f: exact depth %.4g m (%.3g x size), obbOverlap says %.0f", id, d, d / size, yes));
     }
     if (!c.overlap) continue;
@@ -402,11 +421,12 @@ TEST(SatOracle, MovingPairsMatchTheExactOracle) {
   const Real dt = 1e-7;  // [s], a fabric step
   Gen g(777);
   Tally hitVerdict{"hit verdict"}, time{"first-contact time"}, points{"contact points (moving)"};
-  long hits = 0, ambiguous = 0;
+  long hits = 0, ambiguous = 0, wellPosed = 0;
+  double wellPosedError = 0;  // largest |t - t*| / dt where [t(+kBand), t(-kBand)] is narrower than 1e-9 dt
   for (long id = 0; id < pairs; ++id) {
     const Pair p = makePair(g, Kind(id % nKinds));  // the configuration at the time tc
     const Real size = sizeOf(p.a, p.b), speed = g.uni(0.05, 2) * size / 3 / dt;
-    const Oracle o = oracle(p.a, p.b);
+    const Oracle& o = p.o;
     Vec3 n = toVec(o.ax[o.best].n) * (o.ax[o.best].s < 0 ? -1.0 : 1.0);
     Vec3 dir;  // of W = vb - va
     const int mode = g.pick(3);
@@ -422,14 +442,15 @@ TEST(SatOracle, MovingPairsMatchTheExactOracle) {
     const Real tc = g.uni(-0.2, 1.2) * dt;
     OBB a0 = p.a, b0 = p.b;
     a0.centre -= va * tc, b0.centre -= vb * tc;
-    const Oracle m = oracle(a0, b0, vb - va);
+    Oracle m = o;  // the same boxes, moved back to t = 0
+    m.place(a0, b0, vb - va);
     const SweptContact s = obbFirstContact(a0, va, b0, vb, dt);
     const Q delta = kBand * size, eta = kTimeTol * dt;
     Q tEarly = 0, tLate = 0;
     const bool loose = m.moving(delta, -eta, dt + eta, &tEarly), strict = m.moving(-delta, eta, dt - eta, &tLate);
     if (loose != strict) ++ambiguous;
     else
-      hitVerdict.check(s.hit == strict, p.kind, 1,
+      hitVerdict.check(s.hit == strict, p.kind, s.hit == strict ? 0 : 1,
                        fmt("pair %.0f: exact hit %.0f (t %.6g of dt), obbFirstContact says %.0f at %.6g of dt", id, strict,
                            static_cast<double>(strict ? tLate : tEarly) / dt, s.hit, s.time / dt));
     if (!s.hit) continue;
@@ -437,6 +458,13 @@ TEST(SatOracle, MovingPairsMatchTheExactOracle) {
     if (strict) {
       const Real lo = std::max(0.0, static_cast<double>(tEarly)), hi = std::max(0.0, static_cast<double>(tLate));
       const double excess = std::max(lo - s.time, s.time - hi) / (kTimeTol * dt);
+      if (hi - lo < kTimeTol * dt) {
+        Q t0 = 0;
+        if (m.moving(0, 0, dt, &t0)) {
+          ++wellPosed;
+          wellPosedError = std::max(wellPosedError, std::abs(s.time - std::max(0.0, static_cast<double>(t0))) / dt);
+        }
+      }
       time.check(excess <= 1, p.kind, excess,
                  fmt("pair %.0f: time %.9g of dt, exact window [%.9g, %.9g] of dt (off by %.3g dt)", id, s.time / dt,
                      lo / dt, hi / dt, std::max(lo - s.time, s.time - hi) / dt));
@@ -445,7 +473,9 @@ TEST(SatOracle, MovingPairsMatchTheExactOracle) {
     a1.centre += va * s.time, b1.centre += vb * s.time;
     if (s.contact.overlap) checkPoints(points, a1, b1, s.contact, p.kind, id);
   }
-  std::printf("moving pairs %ld: %ld hits, %ld with an ambiguous verdict (band)\n", pairs, hits, ambiguous);
+  std::printf("moving pairs %ld: %ld hits, %ld with an ambiguous verdict (band); |t - t*| <= %.3g dt on the %ld "
+              "well-posed hits\n",
+              pairs, hits, ambiguous, wellPosedError, wellPosed);
   for (const Tally* t : {&hitVerdict, &time, &points}) t->print();
   EXPECT_EQ(hitVerdict.total(), 0);
   EXPECT_EQ(time.total(), 0);
