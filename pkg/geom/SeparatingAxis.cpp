@@ -87,9 +87,12 @@ inline AxisTerms eberlyEdge(int i, int j, const OBB& a, const OBB& b, const Fram
 // the moving test. Out of line: it keeps the loops over Eberly's forms small. Cloned for CPUs with FMA
 // (picked at load time), where std::fma is one instruction instead of a call to libm.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-[[gnu::target_clones("fma", "default")]]
+#define WOVEN_FMA_CLONES [[gnu::target_clones("fma", "default")]]
+#else
+#define WOVEN_FMA_CLONES
 #endif
-[[gnu::noinline]] AxisTerms exactEdge(int i, int j, const OBB& a, const OBB& b, const Vec3& D, Vec3& L) {
+WOVEN_FMA_CLONES [[gnu::noinline]] Vec3 exactCross(const Vec3& u, const Vec3& v) { return accurateCross(u, v); }
+WOVEN_FMA_CLONES [[gnu::noinline]] AxisTerms exactEdge(int i, int j, const OBB& a, const OBB& b, const Vec3& D, Vec3& L) {
   L = accurateCross(a.axis(i), b.axis(j));
   const Real len = L.norm();
   if (!(len >= kParallel)) return {0, 0, 0, 0, 0};
@@ -98,6 +101,7 @@ inline AxisTerms eberlyEdge(int i, int j, const OBB& a, const OBB& b, const Fram
   for (int k = 0; k < 3; ++k) Rsum += (k != i ? a.extent[k] * pa[k] : 0) + (k != j ? b.extent[k] * pb[k] : 0);
   return {L.dot(D), Rsum, len, i == 0 ? 0 : pa[0], j == 0 ? 0 : pb[0]};
 }
+#undef WOVEN_FMA_CLONES
 
 inline AxisTerms axisTerms(int k, const OBB& a, const OBB& b, const Frame& f) {
   if (k < 6) return faceTerms(k, a, b, f);
@@ -111,7 +115,7 @@ Vec3 unitAxis(int k, const OBB& a, const OBB& b, const Frame& f) {
   if (k < 3) return a.axis(k);
   if (k < 6) return b.axis(k - 3);
   const int i = (k - 6) / 3, j = (k - 6) % 3;
-  const Vec3 L = f.absC(i, j) > kExactCos ? accurateCross(a.axis(i), b.axis(j)) : Vec3(a.axis(i).cross(b.axis(j)));
+  const Vec3 L = f.absC(i, j) > kExactCos ? exactCross(a.axis(i), b.axis(j)) : Vec3(a.axis(i).cross(b.axis(j)));
   return L / L.norm();
 }
 
