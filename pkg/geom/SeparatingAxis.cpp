@@ -103,13 +103,6 @@ WOVEN_FMA_CLONES [[gnu::noinline]] AxisTerms exactEdge(int i, int j, const OBB& 
 }
 #undef WOVEN_FMA_CLONES
 
-inline AxisTerms axisTerms(int k, const OBB& a, const OBB& b, const Frame& f) {
-  if (k < 6) return faceTerms(k, a, b, f);
-  const int i = (k - 6) / 3, j = (k - 6) % 3;
-  Vec3 L;
-  return f.absC(i, j) > kExactCos ? exactEdge(i, j, a, b, f.D, L) : eberlyEdge(i, j, a, b, f);
-}
-
 // Unit axis k (not oriented), the cross product exact where it is near-parallel.
 Vec3 unitAxis(int k, const OBB& a, const OBB& b, const Frame& f) {
   if (k < 3) return a.axis(k);
@@ -188,27 +181,6 @@ int clipContact(const OBB& R, int r, const Vec3& n, bool faceAxis, const OBB& I,
 
 }  // namespace
 
-namespace {
-// Edge axis A_i x B_j of obbOverlap: apart by more than the allowance along the unit axis?
-// (Indices are template arguments so that the nine tests unroll with constant indices.)
-template <int i, int j>
-inline bool edgeApart(const OBB& a, const OBB& b, const Frame& f, Real pad2) {
-  constexpr int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-  const Mat3& M = f.absC;
-  if (M(i, j) > kExactCos) {
-    Vec3 L;
-    const AxisTerms t = exactEdge(i, j, a, b, f.D, L);
-    return std::abs(t.s) - t.Rsum > t.len * f.pad;
-  }
-  const Vec3 &ea = a.extent, &eb = b.extent;
-  const Real c1 = f.C(i1, j), c2 = f.C(i2, j);
-  // gap > |L| pad, squared to spare the root
-  const Real gap = std::abs(c1 * f.AD[i2] - c2 * f.AD[i1]) -
-                   (ea[i1] * M(i2, j) + ea[i2] * M(i1, j) + eb[j1] * M(i, j2) + eb[j2] * M(i, j1));
-  return gap > 0 && gap * gap > (c1 * c1 + c2 * c2) * pad2;
-}
-}  // namespace
-
 bool obbOverlap(const OBB& a, const OBB& b) {
   // Same 15 tests as obbContact, written out so the yes/no answer costs no more than the test itself.
   const Frame f(a, b);
@@ -218,10 +190,31 @@ bool obbOverlap(const OBB& a, const OBB& b) {
     if (std::abs(f.AD[i]) > ea[i] + eb[0] * M(i, 0) + eb[1] * M(i, 1) + eb[2] * M(i, 2) + f.pad) return false;
   for (int j = 0; j < 3; ++j)
     if (std::abs(f.BD[j]) > ea[0] * M(0, j) + ea[1] * M(1, j) + ea[2] * M(2, j) + eb[j] + f.pad) return false;
-  const Real pad2 = f.pad * f.pad;
-  return !(edgeApart<0, 0>(a, b, f, pad2) || edgeApart<0, 1>(a, b, f, pad2) || edgeApart<0, 2>(a, b, f, pad2) ||
-           edgeApart<1, 0>(a, b, f, pad2) || edgeApart<1, 1>(a, b, f, pad2) || edgeApart<1, 2>(a, b, f, pad2) ||
-           edgeApart<2, 0>(a, b, f, pad2) || edgeApart<2, 1>(a, b, f, pad2) || edgeApart<2, 2>(a, b, f, pad2));
+  // Eberly's gap (scaled by |L|) is off by at most ~30u (sum e + |D|) however near parallel the edges:
+  // below -sure = -1e-13 (sum e + |AD|_1) neither it nor the exact form can say apart. Most axes of
+  // overlapping boxes are there, so one comparison decides them; near-parallel axes above it are left
+  // to the exact form (after the loop, which so has no call in it).
+  const Real pad2 = f.pad * f.pad, sure = 1e-13 * (ea.sum() + eb.sum() + f.AD.cwiseAbs().sum());
+  unsigned exact = 0;
+  for (int i = 0; i < 3; ++i) {
+    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+    for (int j = 0; j < 3; ++j) {
+      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      const Real c1 = f.C(i1, j), c2 = f.C(i2, j);
+      const Real gap = std::abs(c1 * f.AD[i2] - c2 * f.AD[i1]) -
+                       (ea[i1] * M(i2, j) + ea[i2] * M(i1, j) + eb[j1] * M(i, j2) + eb[j2] * M(i, j1));
+      if (gap <= -sure) continue;
+      if (M(i, j) > kExactCos) exact |= 1u << (3 * i + j);
+      else if (gap > 0 && gap * gap > (c1 * c1 + c2 * c2) * pad2) return false;  // gap > |L| pad, no root
+    }
+  }
+  for (; exact; exact &= exact - 1) {
+    const int k = __builtin_ctz(exact);
+    Vec3 L;
+    const AxisTerms t = exactEdge(k / 3, k % 3, a, b, f.D, L);
+    if (std::abs(t.s) - t.Rsum > t.len * f.pad) return false;
+  }
+  return true;
 }
 
 namespace {
@@ -235,16 +228,25 @@ bool minimumAxis(const OBB& a, const OBB& b, const Frame& f, Real slop, Real lat
   best = -1;
   Real lateralDepth = INFINITY, lateralAlong = 0;
   int lateral = -1;
-  for (int k = 0; k < 15; ++k) {
-    const AxisTerms t = axisTerms(k, a, b, f);
-    if (t.len == 0) continue;  // exactly parallel edges: not an axis
+  const Real allowance = f.pad + slop;
+  // false if axis k separates; depth = -gap/len compared as -gap < best * len: no division per axis
+  auto consider = [&](int k, const AxisTerms& t) {
     const Real gap = std::abs(t.s) - t.Rsum;
-    if (gap > t.len * (f.pad + slop)) return false;  // separating axis: early out
-    const Real depth = -gap / t.len;
-    if (depth < bestDepth) bestDepth = depth, best = k, along = t.s;  // strict: faces (tested first) win ties
-    if (Lateral && depth < lateralDepth && t.la <= lateralCos * t.len && t.lb <= lateralCos * t.len)
-      lateralDepth = depth, lateral = k, lateralAlong = t.s;
-  }
+    if (gap > t.len * allowance) return false;  // separating axis: early out
+    if (-gap < bestDepth * t.len) bestDepth = -gap / t.len, best = k, along = t.s;  // strict: faces win ties
+    if (Lateral && -gap < lateralDepth * t.len && t.la <= lateralCos * t.len && t.lb <= lateralCos * t.len)
+      lateralDepth = -gap / t.len, lateral = k, lateralAlong = t.s;
+    return true;
+  };
+  for (int k = 0; k < 6; ++k)
+    if (!consider(k, faceTerms(k, a, b, f))) return false;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      Vec3 L;
+      const AxisTerms t = f.absC(i, j) > kExactCos ? exactEdge(i, j, a, b, f.D, L) : eberlyEdge(i, j, a, b, f);
+      if (t.len == 0) continue;  // exactly parallel edges: not an axis
+      if (!consider(6 + 3 * i + j, t)) return false;
+    }
   if (Lateral && lateral >= 0) best = lateral, bestDepth = lateralDepth, along = lateralAlong;
   return true;
 }
