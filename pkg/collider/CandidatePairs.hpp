@@ -23,7 +23,10 @@ struct CPPair {
 struct PairFilter {
   Index selfExclude = 1;          ///< the user's minimum
   std::vector<Index> yarnExclude; ///< per yarn, from its sections and CP lengths (set by configure)
-  void configure(const Fabric& f, Index minimum) {
+  /// `widen`: the widest semi-axis a section can reach, over r0 (1 for round sections; the gap
+  /// model measures flattened widths side by side, up to r0 / (1 - MCD), and a yarn folded back on
+  /// itself cannot hold its two legs that far apart across fewer CPs: they would fight its springs).
+  void configure(const Fabric& f, Index minimum, Real widen = 1) {
     selfExclude = minimum;
     yarnExclude.assign(f.yarns.size(), minimum);
     for (std::size_t y = 0; y < f.yarns.size(); ++y) {
@@ -31,7 +34,7 @@ struct PairFilter {
       Real r = 0, l = INFINITY;
       for (Index k = Y.firstNode; k < Y.firstNode + Y.nNodes; ++k) r = std::max(r, f.secRadius[k]);
       for (Index e = Y.firstElem; e < Y.firstElem + Y.nElems; ++e) l = std::min(l, f.restLength[e]);
-      if (Y.nElems > 0) yarnExclude[y] = std::max(minimum, 1 + static_cast<Index>(std::ceil(2 * r / l)));
+      if (Y.nElems > 0) yarnExclude[y] = std::max(minimum, 1 + static_cast<Index>(std::ceil(2 * widen * r / l)));
     }
   }
   bool excluded(const Fabric& f, Index a, Index b) const {

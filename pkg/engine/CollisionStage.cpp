@@ -75,7 +75,9 @@ void CollisionStage::setParams(const ContactParams& p) {
 }
 
 void CollisionStage::refit(Fabric& f, Real dt) {
-  if (filter_.yarnExclude.size() != f.yarns.size()) filter_.configure(f, params_.selfExclude);
+  if (filter_.yarnExclude.size() != f.yarns.size())
+    filter_.configure(f, params_.selfExclude,
+                      params_.model == ContactModel::Gap ? semiAxes(1, params_.mcd, params_.rule).a : 1.0);
   updateSectionFrames(f, tangent_);
   refitBounds(f, tangent_, params_.rule, params_.margin, bounds_);
   // Each CP's broad-phase box grows by the farthest its nodes can drift in the step, and (gap model)
