@@ -49,6 +49,7 @@ Real CollisionStage::capacityOne(const Fabric& f, const CPContact& c, bool sideB
 // A gap contact whose measure is mostly the half-thickness (pieces crossing at more than 32.5
 // degrees, half way through the blend of GapFunction's thicknessWeight): it flattens b itself.
 bool CollisionStage::crossesSteeply(const Fabric& f, const CPContact& c) const {
+  if (f.elemYarn[c.cpA] == f.elemYarn[c.cpB]) return true;  // a fold: face to face (GapFunction)
   const Vec3 tA = (f.pos[f.elem0[c.cpA] + 1] - f.pos[f.elem0[c.cpA]]).normalized();
   const Vec3 tB = (f.pos[f.elem0[c.cpB] + 1] - f.pos[f.elem0[c.cpB]]).normalized();
   return std::abs(tA.dot(tB)) < 0.84339144581288572;  // cos 32.5 degrees

@@ -102,7 +102,8 @@ void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kin
     // Half-thicknesses where the pieces cross at more than 45 degrees, supports along hDir (widths
     // where the ribbons meet edge to edge) below 20, blended between: g must not jump where a pair
     // turns from crossing to side by side (see GapFunction.hpp).
-    const Real lambda = thicknessWeight(qa.t, qb.t);
+    // A yarn folded back onto itself folds about its width (the easy way): its legs lie face to face.
+    const Real lambda = f.elemYarn[a] == f.elemYarn[b] ? 1.0 : thicknessWeight(qa.t, qb.t);
     c.hA = lambda * qa.b + (1 - lambda) * support(qa, c.hDir);
     c.hB = lambda * qb.b + (1 - lambda) * support(qb, c.hDir);
   }
