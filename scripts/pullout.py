@@ -58,6 +58,10 @@ defaults.update({
     'back_tension': (0.05, 'N', 'dead load along -x on the pulled yarn\'s far end, from the start, in [0, 10]'),
     'safety': (0.7, '', 'O.dt = safety * dt_crit, in (0, 1]'),
     'samples': (400, '', 'rows of curve.csv, at least 20'),
+    # The grip force is the support reaction of one step: impulses make it jump from step to step
+    # (stick-slip), so its largest sample depends on when samples fall. The peak is taken from the
+    # curve averaged over this much grip travel (a load cell's bandwidth); the raw one is reported too.
+    'smooth': (1e-4, 'm', 'grip travel the force is averaged over before its peak is taken, in [0, pull / 4]'),
     'energy_limit': (0.02, '', 'allowed energy-balance error of the pull / the energy turnover, in (0, 1)'),
     'out': ('', '', 'output folder (default out/pullout)'),
 })
@@ -102,6 +106,7 @@ settle_left = eng.settle_sections()
 X0 = woven.positions(eng).copy()
 length_x = float(w.summary['length_x'])
 finite_in('pull', 0, 2 * length_x, lo_open=True)
+finite_in('smooth', 0, p.pull / 4)
 
 pulled = w.warp_yarns[len(w.warp_yarns) // 2]
 pinfo = eng.yarn(pulled)
@@ -214,7 +219,9 @@ checks = {}
 thickness = min(eng.yarn(w.warp_yarns[0])['thickness'], eng.yarn(w.weft_yarns[0])['thickness'])
 if phase['E_pull0'] is not None and len(C) > 5:
     disp, F = C[:, 1], C[:, 2]
-    ipk = int(np.argmax(F))
+    n_avg = max(1, int(round(p.smooth / (disp[-1] / (len(disp) - 1))))) if disp[-1] > 0 else 1
+    F_avg = np.convolve(F, np.ones(n_avg) / n_avg, mode='valid')  # centred window of n_avg samples
+    ipk = int(np.argmax(F_avg)) + (n_avg - 1) // 2
     E0, E1 = phase['E_pull0'], eng.energy()
     X1 = woven.positions(eng)
     # The dead loads (back tension, and the pre-tension unless clamped) are constant during the pull:
@@ -231,7 +238,8 @@ if phase['E_pull0'] is not None and len(C) > 5:
     energy_curve = float(np.trapz(F, disp))
     far_moved = float(X1[far][0] - X0[far][0])
     measured.update({
-        'peak_force': float(F[ipk]), 'peak_displacement': float(disp[ipk]),
+        'peak_force': float(F_avg.max()), 'peak_displacement': float(disp[ipk]), 'peak_force_raw': float(F.max()),
+        'smoothing_samples': n_avg,
         'mean_force': energy_curve / float(disp[-1]) if disp[-1] > 0 else 0.0,
         'pullout_energy': energy_curve, 'grip_work_books': W_grip, 'back_tension_work': W_back,
         'pretension_work': W_pre,
@@ -257,12 +265,14 @@ if phase['E_pull0'] is not None and len(C) > 5:
 else:
     status = status if status != 'ok' else 'failed'
 
-if len(C) > 5:
+if 'peak_force' in measured:
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.5))
-    a1.plot(C[:, 1] * 1e3, C[:, 2], 'k-', lw=1)
+    a1.plot(C[:, 1] * 1e3, C[:, 2], '-', color='0.6', lw=0.8, label='grip force')
+    a1.plot(disp[(n_avg - 1) // 2:(n_avg - 1) // 2 + len(F_avg)] * 1e3, F_avg, 'k-', lw=1.2,
+            label='averaged over %.2g mm' % (1e3 * p.smooth))
     a1.plot([measured['peak_displacement'] * 1e3], [measured['peak_force']], 'ro',
             label='peak %.3g N at %.2f mm' % (measured['peak_force'], 1e3 * measured['peak_displacement']))
     a1.set_xlabel('grip displacement [mm]')
@@ -291,7 +301,7 @@ reference = {
     'coulomb_estimate_peak_force': p.friction * 2 * p.pretension * math.sin(w.summary['weft_weave_angle']) * n_cross,
     'weave_angle': w.summary['weft_weave_angle'],
 }
-units = {'peak_force': 'N', 'peak_displacement': 'm', 'mean_force': 'N', 'pullout_energy': 'J', 'grip_work_books': 'J',
+units = {'peak_force': 'N', 'peak_force_raw': 'N', 'peak_displacement': 'm', 'mean_force': 'N', 'pullout_energy': 'J', 'grip_work_books': 'J',
          'back_tension_work': 'J', 'pretension_work': 'J', 'grip_travel': 'm', 'far_end_displacement_x': 'm',
          'energy': 'J', 'energy_balance_error': 'fraction of the energy turnover of the pull', 'final_overlap': 'm',
          'max_transient_penetration': 'm', 'coulomb_estimate_peak_force': 'N', 'weave_angle': 'rad', 'dt': 's',
