@@ -242,7 +242,7 @@ if phase['E_pull0'] is not None and len(C) > 5:
     W_grip = W_engine - W_dead
     d_books = {k: E1[k] - E0[k] for k in ('kinetic', 'elastic', 'damped', 'contact')}
     residual = sum(d_books.values()) - W_engine  # = change of the engine's balance error over the pull
-    turnover = abs(W_grip) + abs(W_dead) + sum(abs(v) for v in d_books.values())
+    turnover = abs(W_grip) + abs(W_back) + abs(W_pre) + sum(abs(v) for v in d_books.values())
     balance = residual / turnover if turnover > 0 else 0.0
     energy_curve = float(np.sum(F[1:] * np.diff(disp)))  # each row holds the mean force over its interval
     far_moved = float(X1[far][0] - X0[far][0])
