@@ -315,4 +315,10 @@ def v50(rows, boot=200, boot_seed=1, level=0.95):
             lo, hi = np.percentile(vals, [50 * (1 - level), 50 * (1 + level)])
             out.update({'V50_ci': [float(lo), float(hi)], 'ci_level': level, 'bootstrap_samples': len(vals),
                         'bootstrap_without_fit': failed, 'V50_bootstrap_std': float(np.std(vals))})
+            # Resampling cannot see between the velocities that were shot: when every stop is slower
+            # than every perforation, V_bl of nearly every resample sits on the fastest stop and the
+            # interval shrinks to a point (measured: [95.0, 95.0] with stops up to 95 and perforations
+            # from 110 m/s). The V50 can lie anywhere in that bracket, so V50_interval spans it too.
+            b = bracket(rows).get('bracket')
+            out['V50_interval'] = [min(float(lo), b[0]), max(float(hi), b[1])] if b else [float(lo), float(hi)]
     return out

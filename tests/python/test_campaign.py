@@ -11,10 +11,11 @@ import time
 import pytest
 from conftest import ROOT
 
-# A 6.35 mm ply (8 x 8 yarns, 1 CP per crossing) struck by a 2 mm, 0.2 g cube: 0.1-0.6 s of
-# simulation per run, the rest is YADE's start. Its V50 lies between 50 and 100 m/s (measured).
+# A 6.35 mm ply (8 x 8 yarns, 1 CP per crossing) struck by a 2 mm, 0.2 g cube: under a second of
+# simulation per run, the rest is YADE's start. Weibull modulus 3 scatters the yarn strengths enough
+# that the seeds change the residual velocity (38-56 m/s at 80 m/s, measured) and V50 (~60 m/s).
 SCENE = 'side=0.00635 size=2e-3 mass=0.2e-3 samples=10 clear_steps=20 energy_limit=0.05'
-KEYS = ['velocities=40,55,65,75,85,95,110,130', 'seeds=1,2,3,4,5', 'weibull_m=10', 't_end=3e-5',
+KEYS = ['velocities=40,50,55,60,65,70,80,100', 'seeds=1,2,3,4,5', 'weibull_m=3', 't_end=6e-5',
         'scene=%s' % SCENE, 'boot=100']
 N_RUNS = 40
 TIMING = ('wall_seconds', 'cpu_seconds', 'cp_steps_per_second', 'phase_seconds', 'mirror_seconds')
@@ -84,9 +85,11 @@ def test_killed_campaign_resumes_without_redoing_finished_runs(local_campaign):
         assert os.stat(out / 'runs' / name / 'summary.json').st_mtime_ns == t, name
     assert 'were done' in log and '%d/%d runs' % (N_RUNS, N_RUNS) in log  # the progress bar
     # the fit: a V50 inside the campaign's range, with a bootstrap interval around it
-    assert 40 < m['V50'] < 130
+    assert 40 < m['V50'] < 100
     lo, hi = m['V50_ci']
     assert lo <= m['V50'] <= hi and lo < hi
+    a, b = m['V50_interval']
+    assert a <= lo and hi <= b  # the bootstrap interval, widened to the bracket when there is one
     assert m['bootstrap_samples'] + m['bootstrap_without_fit'] == 100
     assert os.path.getsize(out / 'v50.png') > 10000
     rows = open(out / 'campaign.csv').read().strip().splitlines()
