@@ -33,7 +33,7 @@ from woven.contact import CONTACT_KEYS
 
 defaults = dict(WEAVE_KEYS)
 defaults.update({
-    # 10 wefts across the pulled yarn and 4 warps: the default run takes about 20-30 s on one core.
+    # 10 wefts across the pulled yarn and 4 warps: the default run took 12-16 s (9 sweep runs: 12-42 s).
     'nx': (5, '', 'pattern repeats along x: weft yarns crossing the pulled yarn = 2 nx (plain)'),
     'ny': (2, '', 'pattern repeats along y: warp yarns = 2 ny (plain); the pulled one is the middle one'),
     # 2 CPs per span: a node between crossings lets the crimp move along the sliding yarn.
@@ -51,10 +51,12 @@ defaults.update({
     'pull': (3e-3, 'm', 'grip travel, in (0, 2 x the strip length]'),
     'ramp': (0.05, '', 'fraction of the pull over which the grip speed rises from 0, in [0, 0.5]'),
     'settle': (1.5e-4, 's', 'time to apply and hold the pre-tension (60 % ramp, 40 % hold), in (0, 0.01]'),
-    # A free, slack far end whips: a tension-only chain with no bending stiffness sent its tail
-    # inwards at 14 m/s behind a 2 m/s grip and buckled it through the wefts (docs/pullout.md).
+    # Clamped, an axially stiff weft loses its pre-tension once the pulled yarn settles by T L / (E A)
+    # (2 um at 2 N): measured 2 N -> 0.14 N. Dead loads keep it (docs/pullout.md, Protocol).
     'weft_ends': ('load', '', "during the pull, the wefts' loaded ends keep their dead load ('load') or are clamped "
                   "where the pre-tension brought them ('clamp')"),
+    # A free, slack far end whips: a tension-only chain with no bending stiffness sent its tail
+    # inwards at 14 m/s behind a 2 m/s grip and buckled it through the wefts (docs/pullout.md).
     'back_tension': (0.05, 'N', 'dead load along -x on the pulled yarn\'s far end, from the start, in [0, 10]'),
     'safety': (0.7, '', 'O.dt = safety * dt_crit, in (0, 1]'),
     'samples': (400, '', 'rows of curve.csv, at least 20'),
