@@ -146,9 +146,11 @@ if rows:
         Vs = np.linspace(0, V.max() * 1.05, 300)
         ax.plot(Vs, woven.theory.lambert_jonas(Vs, fit['V50'], fit['a'], fit['p']), 'r-',
                 label='Lambert-Jonas: V50 = %.1f m/s, a = %.3f, p = %.2f' % (fit['V50'], fit['a'], fit['p']))
-        if 'V50_ci' in fit:
-            ax.axvspan(fit['V50_ci'][0], fit['V50_ci'][1], color='r', alpha=0.15,
-                       label='%.0f %% bootstrap interval %.1f-%.1f m/s' % (100 * p.level, fit['V50_ci'][0], fit['V50_ci'][1]))
+        if 'V50_interval' in fit:
+            lo, hi = fit['V50_interval']
+            widened = fit['V50_interval'] != fit['V50_ci']
+            ax.axvspan(lo, hi, color='r', alpha=0.15, label='%.0f %% bootstrap interval%s %.1f-%.1f m/s'
+                       % (100 * p.level, ' widened to the bracket' if widened else '', lo, hi))
     ax.plot([0, V.max()], [0, V.max()], 'k:', lw=0.8, label='no fabric')
     ax.set_xlabel('impact velocity [m/s]')
     ax.set_ylabel('residual velocity [m/s]')
