@@ -14,9 +14,8 @@
 # whatever crimp the tensioned wefts give away (measured with free warps: crimped to ~8 %, ends pulled in
 # by 1 mm), so the other warps are held. A pulled yarn with a slack free end whips: its tail ran inwards
 # at 14 m/s behind a 2 m/s grip and buckled through the wefts; the back tension (0.05 N, 2.5 % of the
-# default pre-tension) keeps it taut. Clamped wefts lose their pre-tension as soon as the pulled yarn
-# settles by T L / (E A), 2 um at 2 N (measured: 2 N -> 0.14 N), so dead loads are the default
-# (docs/pullout.md, "Protocol").
+# default pre-tension) keeps it taut. Dead loads hold the wefts' tension at the set value; clamped
+# wefts, axially rigid, are loaded further by the straightening pulled yarn (docs/pullout.md, "Protocol").
 # Output (out/pullout/): curve.csv (grip displacement, grip force, contacts), pullout.png, summary.json
 # (peak force, pull-out energy = area under the curve, energy books of the pull).
 import math
@@ -51,8 +50,9 @@ defaults.update({
     'pull': (3e-3, 'm', 'grip travel, in (0, 2 x the strip length]'),
     'ramp': (0.05, '', 'fraction of the pull over which the grip speed rises from 0, in [0, 0.5]'),
     'settle': (1.5e-4, 's', 'time to apply and hold the pre-tension (60 % ramp, 40 % hold), in (0, 0.01]'),
-    # Clamped, an axially stiff weft loses its pre-tension once the pulled yarn settles by T L / (E A)
-    # (2 um at 2 N): measured 2 N -> 0.14 N. Dead loads keep it (docs/pullout.md, Protocol).
+    # Dead loads keep the wefts' tension at the set value through the pull. Clamped wefts are rigid
+    # axially: the straightening pulled yarn raises their tension (2 N -> 3.4-4.2 N measured), so
+    # the pre-tension is no longer what the sweep varies (docs/pullout.md, Protocol).
     'weft_ends': ('load', '', "during the pull, the wefts' loaded ends keep their dead load ('load') or are clamped "
                   "where the pre-tension brought them ('clamp')"),
     # A free, slack far end whips: a tension-only chain with no bending stiffness sent its tail
@@ -173,8 +173,7 @@ def drive():
         if k + 1 >= n_settle:
             if p.weft_ends == 'clamp':
                 # Locked where the pre-tension brought them, as a rig's side grips are tightened and
-                # then locked. An axially stiff weft loses that tension once the pulled yarn moves by
-                # ~T L / (E A) (2 um at 2 N), which it does (docs/pullout.md).
+                # then locked; from here the wefts' tension follows the pulled yarn (docs/pullout.md).
                 set_pretension(0.0)
                 for i in loaded:
                     eng.fix(i)
