@@ -178,3 +178,23 @@ def test_bootstrap_interval_is_repeatable_and_covers_a_known_curve():
         assert abs(f1['V_bl'] - f2['V_bl']) <= V[i].max() / 400 + 1e-9
     assert wc.bracket([(80, 0, 0), (90, 5, 1)]) == {'bracket': [80, 90]}
     assert wc.bracket([(80, 3, 1), (90, 0, 0)]) == {'mixed_zone': [80, 90]}
+
+
+def test_scheduler_address_of_a_running_cluster(local_campaign, tmp_path):
+    # The path a real cluster takes: a scheduler started elsewhere (here a LocalCluster of this
+    # process), its address given as `scheduler`. The runs give the local campaign's bits.
+    distributed = pytest.importorskip('distributed')
+    cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None)
+    try:
+        keys = [k for k in KEYS if not k.startswith(('velocities=', 'seeds='))] + ['velocities=65,70', 'seeds=4', 'fit=0']
+        r = subprocess.run(['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'campaign.py'), 'out=%s' % tmp_path,
+                            'backend=dask', 'scheduler=%s' % cluster.scheduler_address] + keys,
+                           cwd=str(tmp_path), capture_output=True, text=True, timeout=300)
+    finally:
+        cluster.close()
+    assert r.returncode == 0, r.stdout + r.stderr
+    s = json.load(open(tmp_path / 'summary.json'))
+    assert s['measured']['workers'] == 1 and s['measured']['run_now'] == 2
+    a, b = summaries(local_campaign[0]), summaries(tmp_path)
+    for name in ('V0065.0-s4', 'V0070.0-s4'):
+        assert b[name]['measured']['residual_velocity'] == a[name]['measured']['residual_velocity']
