@@ -186,7 +186,8 @@ def test_scheduler_address_of_a_running_cluster(local_campaign, tmp_path):
     distributed = pytest.importorskip('distributed')
     cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None)
     try:
-        keys = [k for k in KEYS if not k.startswith(('velocities=', 'seeds='))] + ['velocities=65,70', 'seeds=4', 'fit=0']
+        keys = [k for k in KEYS if not k.startswith(('velocities=', 'seeds='))]
+        keys += ['velocities=65,70', 'seeds=4', 'fit=0']  # 2 runs: too few for a fit
         r = subprocess.run(['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'campaign.py'), 'out=%s' % tmp_path,
                             'backend=dask', 'scheduler=%s' % cluster.scheduler_address] + keys,
                            cwd=str(tmp_path), capture_output=True, text=True, timeout=300)
