@@ -5,12 +5,12 @@
 # RUNS) v50.csv, v50.png and summary.json with V50 = V_bl of the fit beside the reference V50 of a
 # KM2 706 single ply (physics-reference.md).
 import glob
-import json
 import os
 import sys
 
 import numpy as np
 import woven
+import woven.campaign
 from woven.params import read_params
 from woven.output import write_summary
 
@@ -20,21 +20,10 @@ files = sorted(glob.glob(os.path.join(p.runs, '*', 'summary.json')))
 if not files:
     raise ValueError('runs = %r is invalid: allowed a folder whose sub-folders hold summary.json files of '
                      'scripts/ballistic.py (yade-batch scripts/batch/v50.table scripts/ballistic.py)' % p.runs)
-rows = []
-for f in files:
-    s = json.load(open(f))
-    if s.get('scene') != 'ballistic':
-        continue
-    m, q = s['measured'], s['parameters']
-    rows.append((q['V'], m['residual_velocity'], int(m['perforated']), q.get('seed', 0), q.get('weibull_m', 0),
-                 m['energy_balance_error'], m['broken_elements'], os.path.basename(os.path.dirname(f))))
-rows.sort()
+rows = woven.campaign.collect(files)  # (V, residual, perforated, seed, weibull_m, balance, broken, run, status)
 d = p.out or p.runs
 os.makedirs(d, exist_ok=True)
-with open(os.path.join(d, 'v50.csv'), 'w') as f:
-    f.write('V_m_s,residual_m_s,perforated,seed,weibull_m,energy_balance_error,broken_elements,run\n')
-    for r in rows:
-        f.write('%.6g,%.6g,%d,%d,%.6g,%.4g,%d,%s\n' % r)
+woven.campaign.write_csv(os.path.join(d, 'v50.csv'), rows)
 V = np.array([r[0] for r in rows])
 vr = np.array([r[1] for r in rows])
 status, fit = 'ok', None
@@ -61,13 +50,7 @@ ax.legend(fontsize=8)
 fig.tight_layout()
 fig.savefig(os.path.join(d, 'v50.png'), dpi=110)
 measured = {'runs': len(rows), 'perforated': int(sum(r[2] for r in rows))}
-stopped = [r[0] for r in rows if not r[2]]
-through = [r[0] for r in rows if r[2]]
-if stopped and through:
-    if max(stopped) < min(through):  # the V50 lies between the fastest stop and the slowest perforation
-        measured['bracket'] = [max(stopped), min(through)]
-    else:  # scatter (seeds): velocities where some runs stopped and some perforated
-        measured['mixed_zone'] = [min(through), max(stopped)]
+measured.update(woven.campaign.bracket(rows))  # or the mixed zone, when seeds scatter
 if fit:
     measured.update({'V50': fit['V_bl'], 'lambert_jonas_a': fit['a'], 'lambert_jonas_p': fit['p'], 'fit_rms': fit['rms']})
 write_summary(d, 'v50', p, measured, {'V50_km2_706_single_ply_022_rcc': [90.0, 100.0]},
