@@ -8,9 +8,9 @@
 #   impulse          woven's default: gap functions with exact-gradient impulse rows and a position
 #                    projection (contact_model=gap; docs/collisions.md), geometric flattening up to the MCD
 #   paper            woven as the paper: SAT normal, depth on the sections, impulses (Eq. 5) (contact_model=paper)
-#   penalty          woven's OBB/SAT geometry, penalty forces k_p * overlap instead of impulses
-#   no_flattening    impulses, sections never flatten
-#   section_springs  flattening resisted by the section springs of the paper's Eq. 7, impulses past the MCD
+#   penalty          the paper's OBB/SAT geometry, penalty forces k_p * overlap instead of impulses
+#   no_flattening    the paper's method, sections never flatten
+#   section_springs  the paper's method, flattening resisted by the section springs of Eq. 7, impulses past the MCD
 #   yade_grid        YADE's GridNode/GridConnection yarns, FrictPhys contacts of stiffness kn
 # Accuracy of a run: the projectile's velocity drop over the same simulated time against the
 # reference run (impulse, finest resolution, half the time step): |dv - dv_ref| / dv_ref; the largest
@@ -76,9 +76,10 @@ t_end = p.t_end or (15e-6 if p.quick else 30e-6)
 METHODS = {
     'impulse': ({}, None, [None]),
     'paper': ({'contact_model': 'paper'}, None, [None]),
-    'penalty': ({'response': 'penalty'}, 'penalty_stiffness', [1e5, 1e6, 1e7]),
-    'no_flattening': ({'flattening': 'none'}, None, [None]),
-    'section_springs': ({'flattening': 'springs'}, 'section_stiffness', [1e3, 1e4, 1e5]),
+    # The response and section variants stay on the paper's contact geometry they were charted with.
+    'penalty': ({'contact_model': 'paper', 'response': 'penalty'}, 'penalty_stiffness', [1e5, 1e6, 1e7]),
+    'no_flattening': ({'contact_model': 'paper', 'flattening': 'none'}, None, [None]),
+    'section_springs': ({'contact_model': 'paper', 'flattening': 'springs'}, 'section_stiffness', [1e3, 1e4, 1e5]),
     'yade_grid': ({'model': 'yade'}, 'kn', [1e5, 1e6, 1e7]),
 }
 if p.methods:

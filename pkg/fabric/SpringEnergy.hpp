@@ -12,4 +12,13 @@ inline Real springEnergy(const Fabric& f, Index e) {
   return 0.5 * f.stiffness[e] * stretch * stretch;
 }
 
+/// Axial spring force of CP e on its first node [N] (the second gets its opposite): K (l - l0) along
+/// the CP, 0 while slack for tension-only yarns. The dashpot is left out (it depends on velocities).
+inline Vec3 springForce(const Fabric& f, Index e) {
+  const Vec3 d = f.pos[f.elem0[e] + 1] - f.pos[f.elem0[e]];
+  const Real l = d.norm(), stretch = l - f.restLength[e];
+  if (!(l > 0) || (stretch < 0 && f.materials[f.yarns[f.elemYarn[e]].material].tensionOnly)) return Vec3::Zero();
+  return (f.stiffness[e] * stretch / l) * d;
+}
+
 }  // namespace woven

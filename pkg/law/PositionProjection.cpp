@@ -7,12 +7,13 @@ namespace woven {
 
 void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
                                  std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop,
-                                 Real maxMove, SectionRule rule, ProjectionReport& rep) {
+                                 Real maxMove, SectionRule rule, Real dt, ProjectionReport& rep) {
   rep = ProjectionReport{};
   if (sweeps <= 0 || (contacts.empty() && bodyContacts.empty())) return;
   allowance_.assign(contacts.size(), NAN);
   marked_.resize(f.nElems(), 0);
   elems_.clear();
+  forceBefore_.clear();
   Real before = 0;
   // Before node k moves for the first time, the spring energy of its (at most two) CPs is counted.
   const auto touch = [&](Index k) {
@@ -22,6 +23,7 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
       if (e >= y.firstElem && e < y.firstElem + y.nElems && !marked_[e]) {
         marked_[e] = 1, elems_.push_back(e);
         before += springEnergy(f, e);
+        forceBefore_.push_back(springForce(f, e));
       }
   };
   // After the first sweep only the contacts with a node (or a body) moved in the sweep before can
@@ -117,8 +119,18 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     if (!moved) break;
   }
   Real after = 0;
-  for (Index e : elems_) after += springEnergy(f, e), marked_[e] = 0;
-  rep.energy = after - before;
+  // The step's kinetic energy takes the forces at the moved positions over the whole drift
+  // (velocity Verlet: dKE = (F_n + F_{n+1})/2 . dx): the moves change F_{n+1} by dF, and so the
+  // kinetic energy by dF . dx / 2, which is booked with the spring energy they put in.
+  Real drift = 0;
+  for (std::size_t q = 0; q < elems_.size(); ++q) {
+    const Index e = elems_[q], i = f.elem0[e];
+    after += springEnergy(f, e), marked_[e] = 0;
+    const Vec3 dF = springForce(f, e) - forceBefore_[q];  // on node i; its opposite on node i + 1
+    const Vec3 v0 = f.invMass[i] > 0 ? f.vel[i] : Vec3::Zero(), v1 = f.invMass[i + 1] > 0 ? f.vel[i + 1] : Vec3::Zero();
+    drift += 0.5 * dt * dF.dot(v0 - v1);
+  }
+  rep.energy = after - before + drift;
 }
 
 }  // namespace woven

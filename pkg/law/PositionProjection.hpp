@@ -8,8 +8,9 @@
 // scaled down where a node would move more than maxMove (or kProjectionTravel maxMove in all),
 // with a body's share dl n / M and its turn I^-1 (r x n) dl. The allowance is what flattening can
 // still take along the normal (the next step's flattening passes absorb that part). Velocities are
-// not changed. The elastic energy the moves put into the springs is returned for the books
-// (EnergyBooks::projection): exact, over the CPs whose nodes moved.
+// not changed. The energy the moves put in is returned for the books (EnergyBooks::projection):
+// the spring energy of the CPs whose nodes moved, and the change of the step's kinetic energy that
+// their changed forces make (dF . dx / 2 over the drift dx = dt v).
 #pragma once
 #include "fabric/Fabric.hpp"
 #include "geom/BodyContact.hpp"
@@ -23,7 +24,7 @@ namespace woven {
 struct ProjectionReport {
   int sweeps = 0;         ///< sweeps made
   long pushed = 0;        ///< contact moves made (over all sweeps)
-  Real energy = 0;        ///< spring energy the moves put in [J] (< 0: taken out)
+  Real energy = 0;        ///< energy the moves put in [J] (< 0: taken out): springs and the step's kinetic energy
   Real overlapLeft = 0;   ///< largest overlap beyond allowance + slop met in the last sweep made [m] (0: none)
 };
 
@@ -43,7 +44,7 @@ class PositionProjection {
   /// the mean overlap of 1 x, 10 x injected 5 times the energy).
   void project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
                std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop, Real maxMove,
-               SectionRule rule, ProjectionReport& report);
+               SectionRule rule, Real dt, ProjectionReport& report);
 
  private:
   std::vector<Real> allowance_;       // per contact, measured once per call (NaN: not yet)
@@ -51,6 +52,7 @@ class PositionProjection {
   std::vector<Index> elems_;
   std::vector<std::uint8_t> movedBefore_, movedNow_;  // per node: moved in the sweep before / in this one
   std::vector<Real> travel_;                          // per node: distance moved in this call [m]
+  Vec3Array forceBefore_;                             // per element of elems_: its spring force before the moves
 };
 
 }  // namespace woven
