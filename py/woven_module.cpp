@@ -76,14 +76,24 @@ Vec3 nodePos(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.fabri
 Vec3 nodeVel(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.dynamics().syncVelocity(i); }
 void setNodePos(FabricEngine& e, Index i, const Vec3& x) {
   e.fabric().checkNode(i);
-  require(x.allFinite(), "position", x.norm(), "finite [m]");
+  require(x.allFinite() && x.cwiseAbs().maxCoeff() <= 1e3, "position", x.allFinite() ? x.cwiseAbs().maxCoeff() : NAN,
+          "finite coordinates within [-1e3, 1e3] m");
+  // The moved node changes the elastic energy: it joins the initial energy (bookEdit), else the
+  // blow-up check would take the edit for an instability.
+  const bool started = e.dynamics().booksStarted();
+  const Real before = started ? e.dynamics().energy().total() : 0.0;
   e.fabric().pos[i] = x;
   e.dynamics().refreshForces();
+  if (started) e.dynamics().bookEdit(e.dynamics().energy().total() - before);
 }
 void setNodeVel(FabricEngine& e, Index i, const Vec3& v) {
   e.fabric().checkNode(i);
-  require(v.allFinite(), "velocity", v.norm(), "finite [m/s]");
+  require(v.allFinite() && v.norm() <= 1e5, "velocity", v.norm(), "finite, |v| <= 1e5 m/s");
+  // The kinetic energy the edit adds joins the initial energy (see setNodePos).
+  const Real m = e.fabric().mass[i];
+  const Real before = 0.5 * m * e.dynamics().syncVelocity(i).squaredNorm();
   e.fabric().vel[i] = v;
+  e.dynamics().bookEdit(0.5 * m * e.dynamics().syncVelocity(i).squaredNorm() - before);
 }
 Real nodeMass(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.fabric().mass[i]; }
 bp::tuple elementNodes(FabricEngine& e, Index k) {
@@ -130,6 +140,7 @@ void saveStatePy(FabricEngine& e, const std::string& path, bool lastGood) {
   else e.saveState(path);
 }
 void loadStatePy(FabricEngine& e, const std::string& path) {
+  // Read into a temporary and checked whole (StateIO, FabricEngine::checkState), then committed.
   e.setState(loadState(path, e.fabric().nNodes()));
 }
 void fixNode(FabricEngine& e, Index i) { e.dynamics().fix(i); }

@@ -71,6 +71,7 @@ void ChainDynamics::configureBreakage(const BreakageParams& p) {
   if (!started_) start();
   computeForces(0.0);  // strains of the current state: the filter starts from them
   breakage_.configure(f_, p);
+  checkpoint();  // the last good state carries the new breakage state (restoreLastGood puts it back)
 }
 
 void ChainDynamics::setBodyAcceleration(const Vec3& g) {
@@ -388,7 +389,12 @@ void ChainDynamics::checkpoint() {
   goodVel_ = f_.vel;
   goodFlat_ = f_.secFlat;
   goodDir_ = f_.secDir;
-  if (breakage_.enabled()) goodAlive_ = f_.alive, goodStiffness_ = f_.stiffness, goodDamping_ = f_.damping;
+  // Broken elements always (a loaded state may hold some with breakage off), and the books and the
+  // breakage state, so that the last good state is a whole state (save_state(last_good=True)).
+  goodAlive_ = f_.alive, goodStiffness_ = f_.stiffness, goodDamping_ = f_.damping;
+  goodBooks_ = books_;
+  goodSpringSeen_ = springSeen_;
+  goodBreak_ = breakage_.state();
   goodStep_ = step_;
   goodTime_ = time_;
   goodDtPrev_ = dtPrev_;
@@ -412,7 +418,30 @@ void ChainDynamics::restoreLastGood() {
   step_ = goodStep_;
   time_ = goodTime_;
   dtPrev_ = goodDtPrev_;
+  breakage_.restore(f_, goodBreak_);
+  const EnergyBooks books = goodBooks_;
+  const bool seen = goodSpringSeen_;
   refreshForces();
+  books_ = books, springSeen_ = seen;  // the books of that state, not the ones of the failed steps
+}
+
+void ChainDynamics::restore(long step, Real time, Real lastDt, const EnergyBooks& books, bool booksStarted,
+                            bool springSeen, const BreakageState& breakage) {
+  const BreakageParams keepBreakage = breakage_.params();
+  breakage_.restore(f_, breakage);
+  step_ = step, time_ = time, dtPrev_ = lastDt;
+  // The forces of the loaded positions and velocities: the same computation the saving run made at
+  // the end of its step, so the same bits; the books come from the file, not from this evaluation.
+  computeForces(0.0);
+  // A state saved without breakage (a pretensioned weave) keeps this engine's breakage settings,
+  // restarted from the loaded strains as configureBreakage would.
+  if (breakage.strength.empty() && !breakage.params.enabled && keepBreakage.enabled) breakage_.configure(f_, keepBreakage);
+  if (booksStarted) {
+    books_ = books, springSeen_ = springSeen, started_ = true;
+  } else {
+    books_ = EnergyBooks(), springSeen_ = false, started_ = false;  // computed at the first step
+  }
+  checkpoint();
 }
 
 }  // namespace woven

@@ -48,8 +48,6 @@ def build_ply(weave_args, contact_args, side=0.0508, clamp=4, state='', breakage
     e = w.engine
     contact.enable(e, **contact_args)
     left = e.settle_sections()
-    if state:
-        e.load_state(state)
     held = w.warp_yarns + w.weft_yarns if clamp == 4 else (w.warp_yarns if clamp == 2 else [])
     for y in held:
         info = e.yarn(y)
@@ -57,6 +55,10 @@ def build_ply(weave_args, contact_args, side=0.0508, clamp=4, state='', breakage
         e.fix(info['first_node'] + info['n_nodes'] - 1)
     if breakage is not None:
         e.enable_breakage(**breakage)
+    if state:
+        # Last: a state saved with breakage brings its broken elements, strengths and filter back
+        # (enabling breakage after it would restart them); one saved without keeps these settings.
+        e.load_state(state)
     return Ply(w, left)
 
 
