@@ -37,10 +37,17 @@ bp::object bytesOf(const std::vector<T>& v) {
 }
 
 Pattern patternFromList(bp::object rows) {
+  // Entries are read as numbers and must be exactly 0 or 1: an int conversion truncated 1.7 to 1.
   std::vector<std::vector<int>> m;
   for (bp::stl_input_iterator<bp::object> r(rows), end; r != end; ++r) {
     std::vector<int> row;
-    for (bp::stl_input_iterator<int> c(*r), e2; c != e2; ++c) row.push_back(*c);
+    for (bp::stl_input_iterator<bp::object> c(*r), e2; c != e2; ++c) {
+      bp::extract<double> x(*c);
+      if (!x.check()) throw ParameterError("pattern", "a non-numeric entry", "entries 0 or 1");
+      const double v = x();
+      if (v != 0 && v != 1) throw ParameterError("pattern", "entry " + fmt(v), "entries 0 or 1 (exactly)");
+      row.push_back(static_cast<int>(v));
+    }
     m.push_back(row);
   }
   return Pattern(m);
@@ -246,6 +253,9 @@ int addBody(FabricEngine& e, long id, bp::object parts, Real mass, const Vec3& i
     b.parts.push_back(p);
   }
   b.validate();
+  // The same YADE body twice would take every impulse twice.
+  for (const RigidBody& o : bodyStage(e).bodies)
+    require(o.id != id, "id", id, "a YADE body not coupled yet (each body once)");
   bodyStage(e).bodies.push_back(b);
   return static_cast<int>(bodyStage(e).bodies.size()) - 1;
 }
@@ -423,7 +433,9 @@ BOOST_PYTHON_MODULE(_woven) {
       .def_readwrite("cp_per_span", &WeaveParams::cpPerSpan)
       .def_readwrite("fine_radius", &WeaveParams::fineRadius).def_readwrite("cp_coarse", &WeaveParams::cpCoarse)
       .def_readwrite("fine_x", &WeaveParams::fineX).def_readwrite("fine_y", &WeaveParams::fineY)
-      .def("validate", &WeaveParams::validate);
+      .def("validate", &WeaveParams::validate)
+      .def("estimated_nodes", &WeaveParams::estimatedNodes, "nodes the weave will have (upper bound)");
+  bp::scope().attr("MAX_WEAVE_NODES") = kMaxWeaveNodes;
   bp::def("penalty_dt_limit", &penaltyDtLimit, (bp::arg("m"), bp::arg("k")),
           "Largest stable time step [s] of a penalty contact of effective mass m [kg] > 0 and stiffness k [N/m] > 0: "
           "2 sqrt(m / k).");

@@ -90,18 +90,18 @@ if not (math.isfinite(p.V) and 0 < p.V <= 5000):
     bad('V', '(0, 5000] m/s, finite')
 if p.shape not in ('box', 'sphere'):
     bad('shape', "'box' or 'sphere'")
-if not (math.isfinite(p.mass) and p.mass > 0):
-    bad('mass', '(0, inf) kg')
-if not (math.isfinite(p.size) and p.size > 0):
-    bad('size', '(0, inf) m')
-if not (math.isfinite(p.side) and p.side > 0):
-    bad('side', '(0, inf) m')
+if not (math.isfinite(p.mass) and 0 < p.mass <= 10):
+    bad('mass', '(0, 10] kg')
+if not (math.isfinite(p.size) and 1e-4 <= p.size <= 0.1):
+    bad('size', '[1e-4, 0.1] m')
+if not (math.isfinite(p.side) and 1e-3 <= p.side <= 1):
+    bad('side', '[1e-3, 1] m (and at most %d nodes in the ply: woven.ballistic.build_ply)' % woven._woven.MAX_WEAVE_NODES)
 if p.clamp not in (0, 2, 4):
     bad('clamp', '4, 2 or 0 edges')
 if not (math.isfinite(p.standoff) and p.standoff > 0):
     bad('standoff', '(0, inf) m: the projectile starts clear of the ply')
-if not (math.isfinite(p.t_end) and p.t_end > 0):
-    bad('t_end', '(0, inf) s')
+if not (math.isfinite(p.t_end) and 0 < p.t_end <= 0.01):
+    bad('t_end', '(0, 0.01] s')
 if not (0 < p.safety <= 1):
     bad('safety', '(0, 1]')
 if p.samples < 10:

@@ -21,7 +21,7 @@ ChainDynamics::ChainDynamics(Fabric& fabric) : f_(fabric), dtCrit_(criticalTimeS
 
 void ChainDynamics::prescribeVelocity(Index i, const Vec3& v) {
   f_.checkNode(i);
-  require(v.allFinite(), "velocity", v.norm(), "finite [m/s]");
+  require(v.allFinite() && v.norm() <= 1e5, "velocity", v.norm(), "finite, |v| <= 1e5 m/s");
   auto it = std::find(loads_.kinematicNodes.begin(), loads_.kinematicNodes.end(), i);
   if (it == loads_.kinematicNodes.end()) {
     loads_.kinematicNodes.push_back(i);
@@ -35,7 +35,7 @@ void ChainDynamics::prescribeVelocity(Index i, const Vec3& v) {
 }
 
 void ChainDynamics::setVelocityRamp(Real seconds) {
-  require(std::isfinite(seconds) && seconds >= 0, "velocity_ramp", seconds, "[0, inf) s");
+  require(std::isfinite(seconds) && seconds >= 0 && seconds <= 1e6, "velocity_ramp", seconds, "[0, 1e6] s");
   loads_.velocityRamp = seconds;
 }
 
@@ -52,7 +52,7 @@ void ChainDynamics::release(Index i) {
 
 void ChainDynamics::setPointForce(Index i, const Vec3& F) {
   f_.checkNode(i);
-  require(F.allFinite(), "force", F.norm(), "finite [N]");
+  require(F.allFinite() && F.norm() <= 1e9, "force", F.norm(), "finite, |F| <= 1e9 N");
   auto it = std::find(loads_.forceNodes.begin(), loads_.forceNodes.end(), i);
   if (it != loads_.forceNodes.end()) {
     const auto k = it - loads_.forceNodes.begin();
@@ -75,7 +75,7 @@ void ChainDynamics::configureBreakage(const BreakageParams& p) {
 }
 
 void ChainDynamics::setBodyAcceleration(const Vec3& g) {
-  require(g.allFinite(), "gravity", g.norm(), "finite [m/s^2]");
+  require(g.allFinite() && g.norm() <= 1e6, "gravity", g.norm(), "finite, |g| <= 1e6 m/s^2");
   loads_.bodyAcceleration = g;
 }
 
