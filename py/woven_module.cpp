@@ -233,7 +233,7 @@ CollisionStage& bodyStage(FabricEngine& e) {
 }
 RigidBody& bodyAt(FabricEngine& e, int k) {
   auto& b = bodyStage(e).bodies;
-  require(k >= 0 && k < static_cast<int>(b.size()), "body", k, "[0, " + fmt(static_cast<long>(b.size()) - 1) + "]");
+  require(k >= 0 && k < static_cast<int>(b.size()), "index", k, "[0, " + fmt(static_cast<long>(b.size()) - 1) + "]");
   return b[k];
 }
 // parts: list of ('box', half_extents Vector3, offset Vector3, Quaternion) or ('sphere', radius, offset, Quaternion)

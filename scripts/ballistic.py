@@ -18,6 +18,7 @@ import time
 
 import numpy as np
 import woven
+from woven.output import savetxt, atomic_open, savefig
 from woven.params import read_params
 from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS
@@ -262,10 +263,10 @@ balance = rows[-1]['balance']
 perforated = state['outcome'] == 'perforated'
 keys = list(rows[0].keys())
 S = np.array([[r[k] for k in keys] for r in rows])
-np.savetxt(os.path.join(d, 'series.csv'), S, delimiter=',', comments='', header=','.join(keys))
+savetxt(os.path.join(d, 'series.csv'), S, delimiter=',', comments='', header=','.join(keys))
 plot.saveDataTxt(os.path.join(d, 'series.txt'))
 log = eng.break_log()
-with open(os.path.join(d, 'breaks.csv'), 'w') as f:
+with atomic_open(os.path.join(d, 'breaks.csv')) as f:
     f.write('time_s,step,yarn,element,x_m,y_m,z_m,filtered_strain,raw_strain,energy_J\n')
     for b in log:
         f.write('%.9g,%d,%d,%d,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g\n' % (b['time'], b['step'], b['yarn'], b['element'],
@@ -329,7 +330,7 @@ ax[1, 1].plot(t_us, 100 * S[:, col['balance']], 'r-')
 ax[1, 1].set_ylabel('energy balance error [% of initial kinetic]')
 ax[1, 1].set_xlabel('time [us]')
 fig.tight_layout()
-fig.savefig(os.path.join(d, 'ballistic.png'), dpi=100)
+savefig(fig, os.path.join(d, 'ballistic.png'), dpi=100)
 
 if status == 'ok' and not all(c['passed'] for c in checks.values()):
     status = 'failed'

@@ -11,6 +11,7 @@ import sys
 
 import numpy as np
 import woven
+from woven.output import savetxt, atomic_open, savefig
 from woven.params import read_params
 from woven.output import out_dir, write_summary
 
@@ -194,7 +195,7 @@ except RuntimeError as ex:
     status = 'unstable' if isinstance(woven.engine.last_error, woven.InstabilityError) else 'failed'
     print('smith: run stopped:', woven.engine.last_error or ex)
 
-with open(os.path.join(d, 'convergence.csv'), 'w') as fh:
+with atomic_open(os.path.join(d, 'convergence.csv')) as fh:
     keys = ['elements', 'l0', 'dt', 'steps', 'time', 'strain', 'U_E', 'strain_error', 'U_E_error', 'energy_balance_error']
     fh.write(','.join(keys) + '\n')
     for r in rows:
@@ -212,7 +213,7 @@ if rows:
         'U_E': {'value': abs(fine['U_E_error']), 'limit': p.speed_tol, 'passed': abs(fine['U_E_error']) <= p.speed_tol,
                 'what': 'relative error of the lab-frame transverse wave speed'},
     }
-    np.savetxt(os.path.join(d, 'profile.csv'), X, delimiter=',', header='x_m,y_m,z_m', comments='')
+    savetxt(os.path.join(d, 'profile.csv'), X, delimiter=',', header='x_m,y_m,z_m', comments='')
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
@@ -234,7 +235,7 @@ if rows:
     a2.set_title('convergence, V = %g m/s' % p.V)
     a2.legend()
     fig.tight_layout()
-    fig.savefig(os.path.join(d, 'smith.png'), dpi=110)
+    savefig(fig, os.path.join(d, 'smith.png'), dpi=110)
     if status == 'ok' and not all(ch['passed'] for ch in checks.values()):
         status = 'failed'
 

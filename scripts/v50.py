@@ -11,6 +11,7 @@ import sys
 
 import numpy as np
 import woven
+from woven.output import atomic_open, savefig
 from woven.params import read_params
 from woven.output import write_summary
 
@@ -31,7 +32,7 @@ for f in files:
 rows.sort()
 d = p.out or p.runs
 os.makedirs(d, exist_ok=True)
-with open(os.path.join(d, 'v50.csv'), 'w') as f:
+with atomic_open(os.path.join(d, 'v50.csv')) as f:
     f.write('V_m_s,residual_m_s,perforated,seed,weibull_m,energy_balance_error,broken_elements,run\n')
     for r in rows:
         f.write('%.6g,%.6g,%d,%d,%.6g,%.4g,%d,%s\n' % r)
@@ -59,7 +60,7 @@ ax.set_xlabel('impact velocity [m/s]')
 ax.set_ylabel('residual velocity [m/s]')
 ax.legend(fontsize=8)
 fig.tight_layout()
-fig.savefig(os.path.join(d, 'v50.png'), dpi=110)
+savefig(fig, os.path.join(d, 'v50.png'), dpi=110)
 measured = {'runs': len(rows), 'perforated': int(sum(r[2] for r in rows))}
 stopped = [r[0] for r in rows if not r[2]]
 through = [r[0] for r in rows if r[2]]

@@ -28,6 +28,7 @@ KinematicState FabricEngine::state() const {
   s.pos = f.pos, s.vel = f.vel, s.step = dynamics_.stepCount(), s.time = dynamics_.time();
   s.flat = f.secFlat, s.dir = f.secDir, s.lastDt = dynamics_.lastDt();
   s.topology = topologyFingerprint(f);
+  s.yarns = f.nYarns();
   s.alive = f.alive, s.stiffness = f.stiffness, s.damping = f.damping;
   s.booksStarted = dynamics_.booksStarted(), s.springSeen = dynamics_.springSeen(), s.books = dynamics_.books();
   s.breakage = dynamics_.breakage().state();
@@ -59,6 +60,7 @@ void FabricEngine::checkState(const KinematicState& s) const {
           "state", static_cast<double>(s.pos.size()), "a state with " + fmt(n) + " nodes");
   require(static_cast<Index>(s.alive.size()) == ne && s.stiffness.size() == s.alive.size() && s.damping.size() == s.alive.size(),
           "state", static_cast<double>(s.alive.size()), "a state with " + fmt(ne) + " elements");
+  require(s.yarns == f.nYarns(), "state", s.yarns, "a state with " + fmt(f.nYarns()) + " yarns");
   if (s.topology != topologyFingerprint(f))
     throw ParameterError("state", "a state of another weave (topology fingerprint differs)",
                          "a state saved from this weave (same yarns, rest lengths, masses and materials)");

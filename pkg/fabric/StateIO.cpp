@@ -163,7 +163,7 @@ void writeFileAtomic(const std::string& path, const std::string& bytes) {
 void saveState(const std::string& path, const KinematicState& s) {
   checkPath(path);
   const std::int64_t n = static_cast<std::int64_t>(s.pos.size()), ne = static_cast<std::int64_t>(s.alive.size());
-  const std::int64_t ny = static_cast<std::int64_t>(s.breakage.strength.size());
+  const std::int64_t ny = s.yarns;
   if (s.vel.size() != s.pos.size() || s.flat.size() != s.pos.size() || s.dir.size() != s.pos.size() ||
       s.stiffness.size() != s.alive.size() || s.damping.size() != s.alive.size())
     throw std::logic_error("woven: saveState given an inconsistent state");
@@ -229,6 +229,7 @@ KinematicState loadState(const std::string& path, long expectNodes) {
   const std::int64_t n = r.get<std::int64_t>(), ne = r.get<std::int64_t>(), ny = r.get<std::int64_t>();
   if (n < 0 || ne < 0 || ny < 0 || n > 2147483647 || ne > 2147483647 || ny > 2147483647)
     r.fail("node, element and yarn counts in [0, 2^31)");
+  s.yarns = static_cast<long>(ny);
   if (expectNodes >= 0 && n != expectNodes)
     throw ParameterError("state", path + " with " + fmt(n) + " nodes", "a state of this fabric (" + fmt(expectNodes) + " nodes)");
   const std::int64_t step = r.get<std::int64_t>();

@@ -39,6 +39,7 @@ struct KinematicState {
   Real time = 0;           ///< [s]
   Real lastDt = 0;         ///< dt of the step that produced this state [s]
   std::uint64_t topology = 0;  ///< topologyFingerprint of the fabric the state belongs to
+  long yarns = 0;              ///< yarns of that fabric
   std::vector<std::uint8_t> alive;       ///< per element
   std::vector<Real> stiffness, damping;  ///< per element [N/m], [N s/m] (0 where broken)
   bool booksStarted = false, springSeen = false;  ///< ChainDynamics: books computed; contact springs booked

@@ -48,7 +48,7 @@ def _allowed(kind, name, owner):
         return 'an integer in [%d, %d]' % _INT32
     return {'float': 'a real number (SI units)', 'str': 'a string', 'bool': 'True/False (or 0/1)',
             'Vector3': 'a Vector3 (3 real numbers, SI units)', 'Quaternion': 'a unit Quaternion',
-            'Matrix3': 'a Matrix3 (3 x 3 real numbers)'}.get(kind, 'a %s' % kind)
+            'Matrix3': 'a Matrix3 (3 x 3 real numbers)', 'object': 'a list'}.get(kind, 'a %s' % kind)
 
 
 def _bad(kind, value):
@@ -63,8 +63,12 @@ def _bad(kind, value):
         return not isinstance(value, str)
     if kind == 'Vector3':
         return not _is_vec(value, 3)
-    if kind in ('object',):
-        return False
+    if kind == 'object':  # a list (nodes, points, parts): at least iterable
+        try:
+            iter(value)
+        except TypeError:
+            return True
+        return isinstance(value, (str, bytes))
     if kind in ('Quaternion', 'Matrix3'):
         return type(value).__name__ != kind
     # a woven class (YarnMaterial, Pattern, WeaveParams, ...)
@@ -99,7 +103,10 @@ def _diagnose(fname, sig, args, kw, owner, error):
 
 
 def _conversion_error(e):
-    return type(e).__name__ == 'ArgumentError' or isinstance(e, (OverflowError, TypeError))
+    # Boost.Python's stl_input_iterator raises AttributeError ('... has no attribute __iter__') for a
+    # list argument given something else.
+    return (type(e).__name__ == 'ArgumentError' or isinstance(e, (OverflowError, TypeError)) or
+            (isinstance(e, AttributeError) and '__iter__' in str(e)))
 
 
 def _wrap_method(cls_name, name, raw):

@@ -36,7 +36,8 @@ CONTACT_KEYS = {
 def penalty_dt_limit(m, k):
     """Largest stable time step [s] of a penalty contact of effective mass m [kg] and stiffness k [N/m]:
     2 sqrt(m / k) (central differences on an undamped spring; docs/collisions.md)."""
-    return _woven.penalty_dt_limit(float(m), float(k))
+    from ._args import finite
+    return _woven.penalty_dt_limit(finite('m', m, 0, 1e6, 'kg'), finite('k', k, 0, 1e15, 'N/m'))
 
 
 def _convert(key, value):
