@@ -84,11 +84,8 @@ std::uint64_t topologyFingerprint(const Fabric& f) {
     h = fnv(ints, sizeof(ints), h);
     const Real sec[2] = {y.section.width, y.section.thickness};
     h = fnv(sec, sizeof(sec), h);
-    const YarnMaterial& m = f.materials[y.material];
-    const Real mat[5] = {m.E, m.rho, m.area, m.dampingRatio, m.failureStrain};
-    h = fnv(mat, sizeof(mat), h);
-    const std::uint8_t t = m.tensionOnly;
-    h = fnv(&t, 1, h);
+    // Not E, damping, failure strain or tension-only: a state of the same geometry and masses loads
+    // into a weave of another stiffness or damping (a pretensioned weave, then struck undamped).
   }
   h = fnv(f.restLength.data(), f.restLength.size() * sizeof(Real), h);
   h = fnv(f.mass.data(), f.mass.size() * sizeof(Real), h);

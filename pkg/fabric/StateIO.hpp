@@ -48,7 +48,8 @@ struct KinematicState {
 };
 
 /// 64-bit fingerprint of what a state file must match: counts, yarns (nodes, elements, family,
-/// section, material) and the bits of every rest length, node mass and section radius.
+/// section) and the bits of every rest length, node mass and section radius (so the geometry, the
+/// density and the area; not E or the damping, which a loaded state takes from the engine).
 std::uint64_t topologyFingerprint(const Fabric& f);
 
 /// Atomic write (see above). Throws ParameterError ("path") for a path with a NUL character, and
