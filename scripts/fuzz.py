@@ -352,7 +352,7 @@ class Worker:
                    WOVEN_FUZZ_WORKER='%d,%d,%s' % (seed, scene_every, tmpdir))
         self.p = subprocess.Popen([py, '-u', SCRIPT],
                                   stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=open(os.path.join(tmpdir, "worker.log"), "ab"),
-                                  text=True, bufsize=1, env=env)
+                                  text=True, bufsize=1, env=env, cwd=tmpdir)  # relative paths land in tmpdir
         self.fd, self.buf = self.p.stdout.fileno(), b''
 
     def ask(self, i, timeout):

@@ -63,7 +63,7 @@ void FabricEngine::checkState(const KinematicState& s) const {
   require(s.yarns == f.nYarns(), "state", s.yarns, "a state with " + fmt(f.nYarns()) + " yarns");
   if (s.topology != topologyFingerprint(f))
     throw ParameterError("state", "a state of another weave (topology fingerprint differs)",
-                         "a state saved from this weave (same yarns, rest lengths, masses and materials)");
+                         "a state saved from this weave (same yarns, sections, rest lengths and masses)");
   require(s.step >= 0, "step", s.step, "[0, inf)");
   require(std::isfinite(s.time) && s.time >= 0, "time", s.time, "[0, inf) s");
   const Real dtCrit = dynamics_.criticalDt();
