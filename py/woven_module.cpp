@@ -37,10 +37,17 @@ bp::object bytesOf(const std::vector<T>& v) {
 }
 
 Pattern patternFromList(bp::object rows) {
+  // Entries are read as numbers and must be exactly 0 or 1: an int conversion truncated 1.7 to 1.
   std::vector<std::vector<int>> m;
   for (bp::stl_input_iterator<bp::object> r(rows), end; r != end; ++r) {
     std::vector<int> row;
-    for (bp::stl_input_iterator<int> c(*r), e2; c != e2; ++c) row.push_back(*c);
+    for (bp::stl_input_iterator<bp::object> c(*r), e2; c != e2; ++c) {
+      bp::extract<double> x(*c);
+      if (!x.check()) throw ParameterError("pattern", "a non-numeric entry", "entries 0 or 1");
+      const double v = x();
+      if (v != 0 && v != 1) throw ParameterError("pattern", "entry " + fmt(v), "entries 0 or 1 (exactly)");
+      row.push_back(static_cast<int>(v));
+    }
     m.push_back(row);
   }
   return Pattern(m);
@@ -76,14 +83,24 @@ Vec3 nodePos(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.fabri
 Vec3 nodeVel(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.dynamics().syncVelocity(i); }
 void setNodePos(FabricEngine& e, Index i, const Vec3& x) {
   e.fabric().checkNode(i);
-  require(x.allFinite(), "position", x.norm(), "finite [m]");
+  require(x.allFinite() && x.cwiseAbs().maxCoeff() <= 1e3, "position", x.allFinite() ? x.cwiseAbs().maxCoeff() : NAN,
+          "finite coordinates within [-1e3, 1e3] m");
+  // The moved node changes the elastic energy: it joins the initial energy (bookEdit), else the
+  // blow-up check would take the edit for an instability.
+  const bool started = e.dynamics().booksStarted();
+  const Real before = started ? e.dynamics().energy().total() : 0.0;
   e.fabric().pos[i] = x;
   e.dynamics().refreshForces();
+  if (started) e.dynamics().bookEdit(e.dynamics().energy().total() - before);
 }
 void setNodeVel(FabricEngine& e, Index i, const Vec3& v) {
   e.fabric().checkNode(i);
-  require(v.allFinite(), "velocity", v.norm(), "finite [m/s]");
+  require(v.allFinite() && v.norm() <= 1e5, "velocity", v.norm(), "finite, |v| <= 1e5 m/s");
+  // The kinetic energy the edit adds joins the initial energy (see setNodePos).
+  const Real m = e.fabric().mass[i];
+  const Real before = 0.5 * m * e.dynamics().syncVelocity(i).squaredNorm();
   e.fabric().vel[i] = v;
+  e.dynamics().bookEdit(0.5 * m * e.dynamics().syncVelocity(i).squaredNorm() - before);
 }
 Real nodeMass(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.fabric().mass[i]; }
 bp::tuple elementNodes(FabricEngine& e, Index k) {
@@ -130,6 +147,7 @@ void saveStatePy(FabricEngine& e, const std::string& path, bool lastGood) {
   else e.saveState(path);
 }
 void loadStatePy(FabricEngine& e, const std::string& path) {
+  // Read into a temporary and checked whole (StateIO, FabricEngine::checkState), then committed.
   e.setState(loadState(path, e.fabric().nNodes()));
 }
 void fixNode(FabricEngine& e, Index i) { e.dynamics().fix(i); }
@@ -225,7 +243,7 @@ CollisionStage& bodyStage(FabricEngine& e) {
 }
 RigidBody& bodyAt(FabricEngine& e, int k) {
   auto& b = bodyStage(e).bodies;
-  require(k >= 0 && k < static_cast<int>(b.size()), "body", k, "[0, " + fmt(static_cast<long>(b.size()) - 1) + "]");
+  require(k >= 0 && k < static_cast<int>(b.size()), "index", k, "[0, " + fmt(static_cast<long>(b.size()) - 1) + "]");
   return b[k];
 }
 // parts: list of ('box', half_extents Vector3, offset Vector3, Quaternion) or ('sphere', radius, offset, Quaternion)
@@ -245,6 +263,9 @@ int addBody(FabricEngine& e, long id, bp::object parts, Real mass, const Vec3& i
     b.parts.push_back(p);
   }
   b.validate();
+  // The same YADE body twice would take every impulse twice.
+  for (const RigidBody& o : bodyStage(e).bodies)
+    require(o.id != id, "id", id, "a YADE body not coupled yet (each body once)");
   bodyStage(e).bodies.push_back(b);
   return static_cast<int>(bodyStage(e).bodies.size()) - 1;
 }
@@ -423,7 +444,9 @@ BOOST_PYTHON_MODULE(_woven) {
       .def_readwrite("cp_per_span", &WeaveParams::cpPerSpan)
       .def_readwrite("fine_radius", &WeaveParams::fineRadius).def_readwrite("cp_coarse", &WeaveParams::cpCoarse)
       .def_readwrite("fine_x", &WeaveParams::fineX).def_readwrite("fine_y", &WeaveParams::fineY)
-      .def("validate", &WeaveParams::validate);
+      .def("validate", &WeaveParams::validate)
+      .def("estimated_nodes", &WeaveParams::estimatedNodes, "nodes the weave will have (upper bound)");
+  bp::scope().attr("MAX_WEAVE_NODES") = kMaxWeaveNodes;
   bp::def("penalty_dt_limit", &penaltyDtLimit, (bp::arg("m"), bp::arg("k")),
           "Largest stable time step [s] of a penalty contact of effective mass m [kg] > 0 and stiffness k [N/m] > 0: "
           "2 sqrt(m / k).");

@@ -18,6 +18,7 @@ import time
 
 import numpy as np
 import woven
+from woven.output import savetxt, atomic_open, savefig
 from woven.params import read_params
 from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS
@@ -93,18 +94,18 @@ if not (math.isfinite(p.V) and 0 < p.V <= 5000):
     bad('V', '(0, 5000] m/s, finite')
 if p.shape not in ('box', 'sphere'):
     bad('shape', "'box' or 'sphere'")
-if not (math.isfinite(p.mass) and p.mass > 0):
-    bad('mass', '(0, inf) kg')
-if not (math.isfinite(p.size) and p.size > 0):
-    bad('size', '(0, inf) m')
-if not (math.isfinite(p.side) and p.side > 0):
-    bad('side', '(0, inf) m')
+if not (math.isfinite(p.mass) and 0 < p.mass <= 10):
+    bad('mass', '(0, 10] kg')
+if not (math.isfinite(p.size) and 1e-4 <= p.size <= 0.1):
+    bad('size', '[1e-4, 0.1] m')
+if not (math.isfinite(p.side) and 1e-3 <= p.side <= 1):
+    bad('side', '[1e-3, 1] m (and at most %d nodes in the ply: woven.ballistic.build_ply)' % woven._woven.MAX_WEAVE_NODES)
 if p.clamp not in (0, 2, 4):
     bad('clamp', '4, 2 or 0 edges')
 if not (math.isfinite(p.standoff) and p.standoff > 0):
     bad('standoff', '(0, inf) m: the projectile starts clear of the ply')
-if not (math.isfinite(p.t_end) and p.t_end > 0):
-    bad('t_end', '(0, inf) s')
+if not (math.isfinite(p.t_end) and 0 < p.t_end <= 0.01):
+    bad('t_end', '(0, 0.01] s')
 if not (0 < p.safety <= 1):
     bad('safety', '(0, 1]')
 if p.samples < 10:
@@ -272,10 +273,10 @@ balance = rows[-1]['balance']
 perforated = state['outcome'] == 'perforated'
 keys = list(rows[0].keys())
 S = np.array([[r[k] for k in keys] for r in rows])
-np.savetxt(os.path.join(d, 'series.csv'), S, delimiter=',', comments='', header=','.join(keys))
+savetxt(os.path.join(d, 'series.csv'), S, delimiter=',', comments='', header=','.join(keys))
 plot.saveDataTxt(os.path.join(d, 'series.txt'))
 log = eng.break_log()
-with open(os.path.join(d, 'breaks.csv'), 'w') as f:
+with atomic_open(os.path.join(d, 'breaks.csv')) as f:
     f.write('time_s,step,yarn,element,x_m,y_m,z_m,filtered_strain,raw_strain,energy_J\n')
     for b in log:
         f.write('%.9g,%d,%d,%d,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g\n' % (b['time'], b['step'], b['yarn'], b['element'],
@@ -354,7 +355,7 @@ ax[1, 1].plot(t_us, 100 * S[:, col['balance']], 'r-')
 ax[1, 1].set_ylabel('energy balance error [% of initial kinetic]')
 ax[1, 1].set_xlabel('time [us]')
 fig.tight_layout()
-fig.savefig(os.path.join(d, 'ballistic.png'), dpi=100)
+savefig(fig, os.path.join(d, 'ballistic.png'), dpi=100)
 
 if status == 'ok' and not all(c['passed'] for c in checks.values()):
     status = 'failed'

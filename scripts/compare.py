@@ -30,6 +30,7 @@ import numpy as np
 import woven  # noqa: F401  (checks the install)
 from woven.params import read_params
 from woven.output import out_dir, write_summary
+from woven.output import atomic_open, savefig
 
 p = read_params({
     'quick': (False, '', 'a reduced set of cases (a few minutes, for CI)'),
@@ -197,11 +198,11 @@ def fmt(v):
     return str(v)
 
 
-with open(os.path.join(d, 'cases.csv'), 'w') as f:
+with atomic_open(os.path.join(d, 'cases.csv')) as f:
     f.write(','.join(COLS) + '\n')
     for r in rows:
         f.write(','.join(fmt(r.get(k)) for k in COLS) + '\n')
-with open(os.path.join(d, 'table.md'), 'w') as f:
+with atomic_open(os.path.join(d, 'table.md')) as f:
     f.write('| method | CPs/span | dt/dt_crit | stiffness [N/m] | status | v_end [m/s] | velocity-drop error | '
             'max yarn overlap [mm] | max projectile overlap [mm] | energy error | wall s / us |\n')
     f.write('|---|---|---|---|---|---|---|---|---|---|---|\n')
@@ -256,7 +257,7 @@ for model in ('woven', 'yade'):
     scene_rows.append(row)
 for row in scene_rows:
     print('compare: %-8s %-6s %s' % (row['scene'], row['model'], {k: fmt(v) for k, v in row.items() if k not in ('scene', 'model')}))
-with open(os.path.join(d, 'scenes.md'), 'w') as f:
+with atomic_open(os.path.join(d, 'scenes.md')) as f:
     f.write('| scene | model | elements | status | strain error | wave-speed error | toe strain | built crimp | '
             'final overlap [mm] | order flips | process wall incl. YADE start [s] |\n|---|---|---|---|---|---|---|---|---|---|---|\n')
     pc = lambda v: '' if v is None or not isinstance(v, float) else '%.2f %%' % (100 * v)  # noqa: E731
@@ -339,7 +340,7 @@ ax[2].axhline(0.05, color='r', ls=':', lw=0.8)
 fig.suptitle('%s %.3g g at %.0f m/s on a %.1f mm ply, %.0f us; reference: impulse, %d CPs/span, dt = %.2f dt_crit '
              '(velocity drop %.2f m/s)' % (p.shape, p.mass * 1e3, p.V, side * 1e3, t_end * 1e6, REF_RES, ref_case[2], dv_ref))
 fig.tight_layout()
-fig.savefig(os.path.join(d, 'pareto.png'), dpi=110)
+savefig(fig, os.path.join(d, 'pareto.png'), dpi=110)
 plt.close(fig)
 
 # --- stability map -------------------------------------------------------------------------------------
@@ -413,7 +414,7 @@ if p.map:
     for j, r in zip(jobs, outs):
         kind, why = classify(j, r)
         map_rows.append({'method': j[0], 'dt_over_dt_crit': j[1], 'stiffness': j[2], 'V': j[3], 'result': kind, 'why': why})
-    with open(os.path.join(d, 'stability.csv'), 'w') as f:
+    with atomic_open(os.path.join(d, 'stability.csv')) as f:
         f.write('method,dt_over_dt_crit,stiffness,V,result,why\n')
         for r in map_rows:
             f.write('%s,%g,%s,%g,%s,"%s"\n' % (r['method'], r['dt_over_dt_crit'], fmt(r['stiffness']), r['V'], r['result'],
@@ -443,7 +444,7 @@ if p.map:
     from matplotlib.patches import Patch
     fig.legend(handles=[Patch(color=cmap(q), label=n) for q, n in enumerate(FAIL)], loc='lower center', ncol=len(FAIL))
     fig.tight_layout(rect=(0, 0.05, 1, 1))
-    fig.savefig(os.path.join(d, 'stability.png'), dpi=100)
+    savefig(fig, os.path.join(d, 'stability.png'), dpi=100)
     plt.close(fig)
 
 # --- summary ---------------------------------------------------------------------------------------------

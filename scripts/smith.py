@@ -11,6 +11,7 @@ import sys
 
 import numpy as np
 import woven
+from woven.output import savetxt, atomic_open, savefig
 from woven.params import read_params
 from woven.output import out_dir, write_summary
 
@@ -31,18 +32,42 @@ p = read_params({
 })
 if p.model not in ('woven', 'yade'):
     raise ValueError("model = %r is invalid: allowed 'woven' or 'yade'" % p.model)
-for k, lo in (('V', 0), ('E', 0), ('rho', 0), ('length', 0), ('area', 0)):
-    if not p[k] > lo:
-        raise ValueError('%s = %r is invalid: allowed (0, inf) %s' % (k, p[k], p.units[k]))
-if p.elements < 16 or p.elements % 2:
-    raise ValueError('elements = %r is invalid: allowed an even number >= 16' % p.elements)
+# Physical ranges (the weave keys' for E, rho, area) and a size limit, before anything is built.
+RANGES = {'V': (1e-3, 5000), 'E': (1e5, 1e13), 'rho': (1, 1e5), 'area': (1e-16, 1e-2), 'length': (1e-4, 10)}
+for k, (lo, hi) in RANGES.items():
+    if not (math.isfinite(p[k]) and lo <= p[k] <= hi):
+        raise ValueError('%s = %r is invalid: allowed [%g, %g] %s' % (k, p[k], lo, hi, p.units[k]))
+# About 0.5 kB per element (the chain's arrays, the position copies, strains; YADE's grid for model=yade):
+# 1e6 elements is 0.5 GB and, at 0.44 n steps, already hours of run.
+MAX_ELEMENTS = 1000000
+if not (16 <= p.elements <= MAX_ELEMENTS and p.elements % 2 == 0):
+    raise ValueError('elements = %r is invalid: allowed an even number in [16, %d] (about 0.5 kB each)'
+                     % (p.elements, MAX_ELEMENTS))
 if not (1 <= p.levels <= 8 and p.elements >> (p.levels - 1) >= 16):
     raise ValueError('levels = %r is invalid: allowed [1, 8] with elements/2^(levels-1) >= 16' % p.levels)
-if not (0 < p.duration <= 0.95):
+if not (math.isfinite(p.duration) and 0 < p.duration <= 0.95):
     raise ValueError('duration = %r is invalid: allowed (0, 0.95]' % p.duration)
-d = out_dir('smith', p)
+if not (math.isfinite(p.safety) and 0 < p.safety <= 1):
+    raise ValueError('safety = %r is invalid: allowed (0, 1]' % p.safety)
+for k in ('strain_tol', 'speed_tol'):
+    if not (math.isfinite(p[k]) and 0 < p[k] < 1):
+        raise ValueError('%s = %r is invalid: allowed (0, 1)' % (k, p[k]))
 th = woven.theory.smith(p.V, p.E, p.rho)
 c = th['c']
+# The transverse front is located by a line fitted through the nodes of its inclined part, between
+# 20 and 80 % of the struck point's displacement, at half the run: that part spans about
+# 0.6 U_E t1 with t1 = duration (L/2) / (2c). At least MIN_FRONT_NODES nodes must fall in it at the
+# coarsest resolution, else the fit has no points (elements=16 died in numpy's polyfit).
+MIN_FRONT_NODES = 4
+coarsest = p.elements >> (p.levels - 1)
+front_nodes = 0.6 * th['U_E'] * 0.5 * p.duration * (p.length / 2) / c / (p.length / coarsest)
+if front_nodes < MIN_FRONT_NODES:
+    need = int(math.ceil(coarsest * MIN_FRONT_NODES / front_nodes)) << (p.levels - 1)
+    raise ValueError('elements = %r is invalid: allowed elements / 2^(levels-1) giving at least %d nodes on the '
+                     'transverse front at the coarsest resolution (here %.1f; with V = %g m/s, duration = %g and '
+                     'levels = %d: elements >= %d, or fewer levels)'
+                     % (p.elements, MIN_FRONT_NODES, front_nodes, p.V, p.duration, p.levels, need + need % 2))
+d = out_dir('smith', p)
 
 
 def kink(X, t):
@@ -50,6 +75,9 @@ def kink(X, t):
     (20-80 % of the struck point's displacement V t) fitted by a line and extended to y = 0."""
     x, y = X[:, 0], X[:, 1]
     sel = (x > 0) & (y > 0.2 * p.V * t) & (y < 0.8 * p.V * t)
+    if np.count_nonzero(sel) < 2:  # the up-front check makes this rare; say why if it happens
+        raise RuntimeError('the transverse front holds %d nodes at t = %g s: too coarse to locate it (raise elements)'
+                           % (np.count_nonzero(sel), t))
     a, b = np.polyfit(x[sel], y[sel], 1)
     return -b / a
 
@@ -167,7 +195,7 @@ except RuntimeError as ex:
     status = 'unstable' if isinstance(woven.engine.last_error, woven.InstabilityError) else 'failed'
     print('smith: run stopped:', woven.engine.last_error or ex)
 
-with open(os.path.join(d, 'convergence.csv'), 'w') as fh:
+with atomic_open(os.path.join(d, 'convergence.csv')) as fh:
     keys = ['elements', 'l0', 'dt', 'steps', 'time', 'strain', 'U_E', 'strain_error', 'U_E_error', 'energy_balance_error']
     fh.write(','.join(keys) + '\n')
     for r in rows:
@@ -185,7 +213,7 @@ if rows:
         'U_E': {'value': abs(fine['U_E_error']), 'limit': p.speed_tol, 'passed': abs(fine['U_E_error']) <= p.speed_tol,
                 'what': 'relative error of the lab-frame transverse wave speed'},
     }
-    np.savetxt(os.path.join(d, 'profile.csv'), X, delimiter=',', header='x_m,y_m,z_m', comments='')
+    savetxt(os.path.join(d, 'profile.csv'), X, delimiter=',', header='x_m,y_m,z_m', comments='')
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
@@ -207,7 +235,7 @@ if rows:
     a2.set_title('convergence, V = %g m/s' % p.V)
     a2.legend()
     fig.tight_layout()
-    fig.savefig(os.path.join(d, 'smith.png'), dpi=110)
+    savefig(fig, os.path.join(d, 'smith.png'), dpi=110)
     if status == 'ok' and not all(ch['passed'] for ch in checks.values()):
         status = 'failed'
 

@@ -14,6 +14,7 @@ import sys
 
 import numpy as np
 import woven
+from woven.output import savetxt, savefig
 from woven.params import read_params
 from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS
@@ -117,7 +118,7 @@ except RuntimeError as ex:
     print('tension: run stopped:', woven.engine.last_error or ex)
 
 C = np.array(rows) if rows else np.zeros((0, 6))
-np.savetxt(os.path.join(d, 'curve.csv'), C, delimiter=',', comments='',
+savetxt(os.path.join(d, 'curve.csv'), C, delimiter=',', comments='',
            header='time_s,strain,force_N,contacts,impulse_rows,penetration_m')
 
 thickness = min(eng.yarn(w.warp_yarns[0])['thickness'], eng.yarn(w.weft_yarns[0])['thickness'])
@@ -232,7 +233,7 @@ if len(C) > 10:
     a2.set_ylabel('largest overlap before correction [% of thickness]')
     a2.set_title('contacts: %d at the end; crossing order flips: %d of %d' % (int(C[-1, 3]), flips, crossings))
     fig.tight_layout()
-    fig.savefig(os.path.join(d, 'tension.png'), dpi=110)
+    savefig(fig, os.path.join(d, 'tension.png'), dpi=110)
 
 if status == 'ok' and not all(c['passed'] for c in checks.values()):
     status = 'failed'

@@ -11,6 +11,7 @@ import sys
 import numpy as np
 import woven
 import woven.campaign
+from woven.output import savefig
 from woven.params import read_params
 from woven.output import write_summary
 
@@ -48,7 +49,7 @@ ax.set_xlabel('impact velocity [m/s]')
 ax.set_ylabel('residual velocity [m/s]')
 ax.legend(fontsize=8)
 fig.tight_layout()
-fig.savefig(os.path.join(d, 'v50.png'), dpi=110)
+savefig(fig, os.path.join(d, 'v50.png'), dpi=110)
 measured = {'runs': len(rows), 'perforated': int(sum(r[2] for r in rows))}
 measured.update(woven.campaign.bracket(rows))  # or the mixed zone, when seeds scatter
 if fit:

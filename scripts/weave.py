@@ -5,6 +5,7 @@ import os
 import sys
 
 import woven
+from woven.output import savetxt, savefig
 from woven.params import read_params
 from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS, SUMMARY_UNITS
@@ -34,7 +35,7 @@ if is_km2:
 
 import numpy as np
 X = woven.positions(w.engine)
-np.savetxt(os.path.join(d, 'nodes.csv'), X, delimiter=',', header='x_m,y_m,z_m', comments='')
+savetxt(os.path.join(d, 'nodes.csv'), X, delimiter=',', header='x_m,y_m,z_m', comments='')
 
 if p.picture:
     import matplotlib
@@ -74,7 +75,7 @@ if p.picture:
         p.pattern, s['warp_yarns'], s['weft_yarns'], s['areal_density'] * 1e3, 100 * s['warp_crimp_built'],
         100 * s['warp_crimp_peirce'], s['cp_per_span']))
     fig.tight_layout()
-    fig.savefig(os.path.join(d, 'weave.png'), dpi=110)
+    savefig(fig, os.path.join(d, 'weave.png'), dpi=110)
 
 units = dict(SUMMARY_UNITS)
 ok = all(c['passed'] for c in checks.values())

@@ -34,12 +34,53 @@ void Breakage::configure(const Fabric& f, const BreakageParams& p) {
     strength_[y] = s;
   }
   filtered_ = f.strain;
+  setRates(f);
+}
+
+void Breakage::setRates(const Fabric& f) {
   rate_.assign(f.nElems(), 0);
+  if (strength_.empty()) return;
   for (Index e = 0; e < f.nElems(); ++e) {
     const YarnMaterial& m = f.materials[f.yarns[f.elemYarn[e]].material];
-    const Real L = p.filterLength > 0 ? p.filterLength : -p.filterLength * f.restLength[e];
+    const Real L = p_.filterLength > 0 ? p_.filterLength : -p_.filterLength * f.restLength[e];
     rate_[e] = L > 0 ? std::sqrt(m.E / m.rho) / L : INFINITY;
   }
+}
+
+void Breakage::check(const Fabric& f, const BreakageState& s, const std::vector<std::uint8_t>& alive) {
+  const std::string why = "a breakage state of this fabric: ";
+  try {
+    s.params.validate();
+  } catch (const ParameterError& e) {
+    throw ParameterError("state", "breakage parameters", why + e.what());
+  }
+  const bool none = s.strength.empty() && s.filtered.empty();
+  if (!none && (s.strength.size() != f.yarns.size() || s.filtered.size() != static_cast<std::size_t>(f.nElems())))
+    throw ParameterError("state", fmt(s.strength.size()) + " strengths and " + fmt(s.filtered.size()) + " filtered strains",
+                         why + fmt(f.yarns.size()) + " and " + fmt(f.nElems()));
+  if (none && (s.params.enabled || !s.log.empty()))
+    throw ParameterError("state", "breakage on without strengths", why + "strengths and filtered strains when enabled");
+  for (Real v : s.strength)
+    if (!(std::isfinite(v) && v > 0)) throw ParameterError("state", "yarn strength " + fmt(v), why + "(0, inf) finite strengths");
+  for (Real v : s.filtered)
+    if (!std::isfinite(v)) throw ParameterError("state", "filtered strain " + fmt(v), why + "finite filtered strains");
+  if (s.log.size() > static_cast<std::size_t>(f.nElems()))
+    throw ParameterError("state", fmt(s.log.size()) + " breaks", why + "at most one break per element");
+  for (const BreakEvent& ev : s.log) {
+    const bool ok = ev.element >= 0 && ev.element < f.nElems() && ev.yarn == f.elemYarn[ev.element] &&
+                    alive.size() == static_cast<std::size_t>(f.nElems()) && !alive[ev.element] && ev.step >= 0 &&
+                    std::isfinite(ev.time) && ev.position.allFinite() && std::isfinite(ev.strain) &&
+                    std::isfinite(ev.rawStrain) && std::isfinite(ev.energy) && ev.energy >= 0;
+    if (!ok) throw ParameterError("state", "break of element " + fmt(ev.element), why + "breaks of broken elements of this fabric, finite values");
+  }
+}
+
+void Breakage::restore(const Fabric& f, const BreakageState& s) {
+  p_ = s.params;
+  strength_ = s.strength;
+  filtered_ = s.filtered;
+  log_ = s.log;
+  setRates(f);
 }
 
 Real Breakage::apply(Fabric& f, Real dt, long step, Real time) {

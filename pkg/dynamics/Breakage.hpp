@@ -51,6 +51,14 @@ struct BreakEvent {
   Real energy = 0;        ///< elastic energy released [J]
 };
 
+/// Everything a run's breakage carries from step to step (for state files, FabricEngine::state):
+/// the parameters, the drawn yarn strengths, the filtered strains and the break log.
+struct BreakageState {
+  BreakageParams params;
+  std::vector<Real> strength, filtered;  ///< per yarn, per element (both empty: never configured)
+  std::vector<BreakEvent> log;
+};
+
 class Breakage {
  public:
   /// Validates, draws the yarn strengths and starts the filter from the fabric's current strains
@@ -67,10 +75,18 @@ class Breakage {
   const std::vector<Real>& filteredStrain() const { return filtered_; } ///< [-] per element
   const std::vector<BreakEvent>& log() const { return log_; }
   long brokenElements() const { return static_cast<long>(log_.size()); }
+  BreakageState state() const { return {p_, strength_, filtered_, log_}; }
+  /// Throws ParameterError ("state") unless s fits fabric f: valid parameters, sizes of f, finite
+  /// values, logged elements of f that are broken in `alive`.
+  static void check(const Fabric& f, const BreakageState& s, const std::vector<std::uint8_t>& alive);
+  /// Puts a saved breakage state back (check it first): the filter rates follow from the parameters
+  /// as in configure, so a continued run breaks the same elements at the same steps.
+  void restore(const Fabric& f, const BreakageState& s);
   /// Yarns with at least one broken element.
   long brokenYarns(const Fabric& f) const;
 
  private:
+  void setRates(const Fabric& f);  // 1/tau per element from p_ (configure, restore)
   BreakageParams p_;
   std::vector<Real> strength_, filtered_, rate_;  // rate_: 1/tau per element [1/s]
   std::vector<BreakEvent> log_;

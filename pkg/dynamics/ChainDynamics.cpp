@@ -21,7 +21,7 @@ ChainDynamics::ChainDynamics(Fabric& fabric) : f_(fabric), dtCrit_(criticalTimeS
 
 void ChainDynamics::prescribeVelocity(Index i, const Vec3& v) {
   f_.checkNode(i);
-  require(v.allFinite(), "velocity", v.norm(), "finite [m/s]");
+  require(v.allFinite() && v.norm() <= 1e5, "velocity", v.norm(), "finite, |v| <= 1e5 m/s");
   auto it = std::find(loads_.kinematicNodes.begin(), loads_.kinematicNodes.end(), i);
   if (it == loads_.kinematicNodes.end()) {
     loads_.kinematicNodes.push_back(i);
@@ -35,7 +35,7 @@ void ChainDynamics::prescribeVelocity(Index i, const Vec3& v) {
 }
 
 void ChainDynamics::setVelocityRamp(Real seconds) {
-  require(std::isfinite(seconds) && seconds >= 0, "velocity_ramp", seconds, "[0, inf) s");
+  require(std::isfinite(seconds) && seconds >= 0 && seconds <= 1e6, "velocity_ramp", seconds, "[0, 1e6] s");
   loads_.velocityRamp = seconds;
 }
 
@@ -52,7 +52,7 @@ void ChainDynamics::release(Index i) {
 
 void ChainDynamics::setPointForce(Index i, const Vec3& F) {
   f_.checkNode(i);
-  require(F.allFinite(), "force", F.norm(), "finite [N]");
+  require(F.allFinite() && F.norm() <= 1e9, "force", F.norm(), "finite, |F| <= 1e9 N");
   auto it = std::find(loads_.forceNodes.begin(), loads_.forceNodes.end(), i);
   if (it != loads_.forceNodes.end()) {
     const auto k = it - loads_.forceNodes.begin();
@@ -71,10 +71,11 @@ void ChainDynamics::configureBreakage(const BreakageParams& p) {
   if (!started_) start();
   computeForces(0.0);  // strains of the current state: the filter starts from them
   breakage_.configure(f_, p);
+  checkpoint();  // the last good state carries the new breakage state (restoreLastGood puts it back)
 }
 
 void ChainDynamics::setBodyAcceleration(const Vec3& g) {
-  require(g.allFinite(), "gravity", g.norm(), "finite [m/s^2]");
+  require(g.allFinite() && g.norm() <= 1e6, "gravity", g.norm(), "finite, |g| <= 1e6 m/s^2");
   loads_.bodyAcceleration = g;
 }
 
@@ -391,7 +392,12 @@ void ChainDynamics::checkpoint() {
   goodVel_ = f_.vel;
   goodFlat_ = f_.secFlat;
   goodDir_ = f_.secDir;
-  if (breakage_.enabled()) goodAlive_ = f_.alive, goodStiffness_ = f_.stiffness, goodDamping_ = f_.damping;
+  // Broken elements always (a loaded state may hold some with breakage off), and the books and the
+  // breakage state, so that the last good state is a whole state (save_state(last_good=True)).
+  goodAlive_ = f_.alive, goodStiffness_ = f_.stiffness, goodDamping_ = f_.damping;
+  goodBooks_ = books_;
+  goodSpringSeen_ = springSeen_;
+  goodBreak_ = breakage_.state();
   goodStep_ = step_;
   goodTime_ = time_;
   goodDtPrev_ = dtPrev_;
@@ -415,7 +421,30 @@ void ChainDynamics::restoreLastGood() {
   step_ = goodStep_;
   time_ = goodTime_;
   dtPrev_ = goodDtPrev_;
+  breakage_.restore(f_, goodBreak_);
+  const EnergyBooks books = goodBooks_;
+  const bool seen = goodSpringSeen_;
   refreshForces();
+  books_ = books, springSeen_ = seen;  // the books of that state, not the ones of the failed steps
+}
+
+void ChainDynamics::restore(long step, Real time, Real lastDt, const EnergyBooks& books, bool booksStarted,
+                            bool springSeen, const BreakageState& breakage) {
+  const BreakageParams keepBreakage = breakage_.params();
+  breakage_.restore(f_, breakage);
+  step_ = step, time_ = time, dtPrev_ = lastDt;
+  // The forces of the loaded positions and velocities: the same computation the saving run made at
+  // the end of its step, so the same bits; the books come from the file, not from this evaluation.
+  computeForces(0.0);
+  // A state saved without breakage (a pretensioned weave) keeps this engine's breakage settings,
+  // restarted from the loaded strains as configureBreakage would.
+  if (breakage.strength.empty() && !breakage.params.enabled && keepBreakage.enabled) breakage_.configure(f_, keepBreakage);
+  if (booksStarted) {
+    books_ = books, springSeen_ = springSeen, started_ = true;
+  } else {
+    books_ = EnergyBooks(), springSeen_ = false, started_ = false;  // computed at the first step
+  }
+  checkpoint();
 }
 
 }  // namespace woven

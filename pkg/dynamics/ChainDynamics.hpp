@@ -97,6 +97,21 @@ class ChainDynamics {
   /// Sets the clock (step count, time [s], last dt [s]) of a loaded state, so the run continues
   /// exactly as the saved one would have.
   void setClock(long step, Real time, Real lastDt);
+  /// The books as the step left them (kinetic of the last integer step; energy() synchronises it).
+  const EnergyBooks& books() const { return books_; }
+  bool booksStarted() const { return started_; }
+  bool springSeen() const { return springSeen_; }
+  /// Puts back what a state file carries beyond positions, velocities and sections (call after the
+  /// fabric holds them; the caller has checked everything): clock, energy books, breakage state. The
+  /// forces are recomputed without touching the books, and the loaded state becomes the last good one.
+  void restore(long step, Real time, Real lastDt, const EnergyBooks& books, bool booksStarted, bool springSeen,
+               const BreakageState& breakage);
+  /// A hand edit of the state (a node's velocity or position set from outside) changed the energy by
+  /// `delta` [J]: it joins the initial energy, so the blow-up check and the balance start from the
+  /// edited state (else a push from rest looks like a blow-up at the next step).
+  void bookEdit(Real delta) {
+    if (started_ && std::isfinite(delta)) books_.initial += delta;
+  }
   /// Velocity of node i at the current integer step, v_n = v_{n-1/2} + dt/2 a_n [m/s].
   Vec3 syncVelocity(Index i) const;
   /// Total reaction force [N] of the supports on the kinematic nodes in `nodes`.
@@ -105,6 +120,12 @@ class ChainDynamics {
   const Vec3Array& lastGoodPos() const { return goodPos_; }
   const Vec3Array& lastGoodVel() const { return goodVel_; }
   const std::vector<Real>& lastGoodFlat() const { return goodFlat_; }
+  const std::vector<std::uint8_t>& lastGoodAlive() const { return goodAlive_; }
+  const std::vector<Real>& lastGoodStiffness() const { return goodStiffness_; }
+  const std::vector<Real>& lastGoodDamping() const { return goodDamping_; }
+  const EnergyBooks& lastGoodBooks() const { return goodBooks_; }
+  bool lastGoodSpringSeen() const { return goodSpringSeen_; }
+  const BreakageState& lastGoodBreakage() const { return goodBreak_; }
   const Vec3Array& lastGoodDir() const { return goodDir_; }
   long lastGoodStep() const { return goodStep_; }
   Real lastGoodDt() const { return goodDtPrev_; }
@@ -143,6 +164,9 @@ class ChainDynamics {
   std::vector<std::uint8_t> goodAlive_;
   long goodStep_ = 0;
   Real goodTime_ = 0, goodDtPrev_ = 0;
+  EnergyBooks goodBooks_;
+  bool goodSpringSeen_ = false;
+  BreakageState goodBreak_;
   bool started_ = false;
 };
 

@@ -523,6 +523,9 @@ Real CollisionStage::settle(Fabric& f, int maxPasses) {
 }
 
 Real CollisionStage::bodyOverlap(Fabric& f, int k) {
+  // A query: refit turns the section frames to the current tangents, which changes the next step's
+  // frames (they follow their previous direction): put them back so that asking changes nothing.
+  const Vec3Array dirs = f.secDir;
   const ThreadCountScope threadCount(params_.threads);
   refit(f, 0);
   const RigidBody& b = bodies.at(k);
@@ -536,17 +539,24 @@ Real CollisionStage::bodyOverlap(Fabric& f, int k) {
                         : cpBodyContact(f, bounds_[e], e, b, static_cast<int>(part), 0, params_.margin, params_.rule, c[0]);
       for (int q = 0; q < m; ++q) worst = std::max(worst, -c[q].gap);
     }
+  f.secDir = dirs;
   return worst;
 }
 
 Real CollisionStage::overlap(Fabric& f) {
+  // A query: measured by a copy of the stage (its pairs, contacts and contact cache stay the ones
+  // the next step expects), and the section frames refit turns are put back, so that asking
+  // changes nothing (it moved the trajectory by 2e-17 m per call).
+  const Vec3Array dirs = f.secDir;
+  CollisionStage probe(*this);
   const ThreadCountScope threadCount(params_.threads);
-  pairsValid_ = false;
-  refit(f, 0);
-  broad(f);
-  narrow(f, 0);
+  probe.pairsValid_ = false;
+  probe.refit(f, 0);
+  probe.broad(f);
+  probe.narrow(f, 0);
   Real worst = 0;
-  for (const CPContact& c : contacts_) worst = std::max(worst, -c.gap);
+  for (const CPContact& c : probe.contacts_) worst = std::max(worst, -c.gap);
+  f.secDir = dirs;
   return worst;
 }
 

@@ -115,7 +115,7 @@ class CollisionStage : public StepHook {
   Real settle(Fabric& f, int maxPasses = 100);
 
   /// Largest overlap between CPs (-gap of the static contacts) in the fabric as it stands [m]; moves
-  /// nothing (the sections' frames are brought up to date).
+  /// nothing (the section frames it refits are put back; measured by a copy of the stage).
   Real overlap(Fabric& f);
 
   const std::vector<CPContact>& contacts() const { return contacts_; }

@@ -24,17 +24,26 @@ void FabricEngine::enableCollisions(const ContactParams& p, BroadPhase broad) {
 
 KinematicState FabricEngine::state() const {
   KinematicState s;
-  s.pos = fabric_->pos, s.vel = fabric_->vel, s.step = dynamics_.stepCount(), s.time = dynamics_.time();
-  s.flat = fabric_->secFlat, s.dir = fabric_->secDir, s.lastDt = dynamics_.lastDt();
+  const Fabric& f = *fabric_;
+  s.pos = f.pos, s.vel = f.vel, s.step = dynamics_.stepCount(), s.time = dynamics_.time();
+  s.flat = f.secFlat, s.dir = f.secDir, s.lastDt = dynamics_.lastDt();
+  s.topology = topologyFingerprint(f);
+  s.yarns = f.nYarns();
+  s.alive = f.alive, s.stiffness = f.stiffness, s.damping = f.damping;
+  s.booksStarted = dynamics_.booksStarted(), s.springSeen = dynamics_.springSeen(), s.books = dynamics_.books();
+  s.breakage = dynamics_.breakage().state();
   return s;
 }
 
 KinematicState FabricEngine::lastGoodState() const {
-  KinematicState s;
+  if (dynamics_.lastGoodPos().size() != fabric_->pos.size()) return state();
+  KinematicState s = state();
   s.pos = dynamics_.lastGoodPos(), s.vel = dynamics_.lastGoodVel();
   s.flat = dynamics_.lastGoodFlat(), s.dir = dynamics_.lastGoodDir(), s.lastDt = dynamics_.lastGoodDt();
   s.step = dynamics_.lastGoodStep(), s.time = dynamics_.lastGoodTime();
-  if (s.pos.empty()) return state();
+  s.alive = dynamics_.lastGoodAlive(), s.stiffness = dynamics_.lastGoodStiffness(), s.damping = dynamics_.lastGoodDamping();
+  s.books = dynamics_.lastGoodBooks(), s.springSeen = dynamics_.lastGoodSpringSeen(), s.booksStarted = true;
+  s.breakage = dynamics_.lastGoodBreakage();
   return s;
 }
 
@@ -43,14 +52,54 @@ void FabricEngine::saveState(const std::string& path) {
   if (collisions_) collisions_->invalidateCache();
 }
 
+void FabricEngine::checkState(const KinematicState& s) const {
+  const Fabric& f = *fabric_;
+  const Index n = f.nNodes(), ne = f.nElems();
+  require(static_cast<Index>(s.pos.size()) == n && s.vel.size() == s.pos.size() && s.flat.size() == s.pos.size() &&
+              s.dir.size() == s.pos.size(),
+          "state", static_cast<double>(s.pos.size()), "a state with " + fmt(n) + " nodes");
+  require(static_cast<Index>(s.alive.size()) == ne && s.stiffness.size() == s.alive.size() && s.damping.size() == s.alive.size(),
+          "state", static_cast<double>(s.alive.size()), "a state with " + fmt(ne) + " elements");
+  require(s.yarns == f.nYarns(), "state", s.yarns, "a state with " + fmt(f.nYarns()) + " yarns");
+  if (s.topology != topologyFingerprint(f))
+    throw ParameterError("state", "a state of another weave (topology fingerprint differs)",
+                         "a state saved from this weave (same yarns, sections, rest lengths and masses)");
+  require(s.step >= 0, "step", s.step, "[0, inf)");
+  require(std::isfinite(s.time) && s.time >= 0, "time", s.time, "[0, inf) s");
+  const Real dtCrit = dynamics_.criticalDt();
+  require(std::isfinite(s.lastDt) && s.lastDt >= 0 && s.lastDt <= dtCrit * (1 + 1e-12), "last_dt", s.lastDt,
+          "[0, dt_crit = " + fmt(dtCrit) + "] s");
+  for (Index i = 0; i < n; ++i) {
+    require(s.pos[i].allFinite() && s.vel[i].allFinite(), "state", i, "finite positions and velocities (node)");
+    require(s.flat[i] >= 0 && s.flat[i] < 1, "state", s.flat[i], "section flattening eps in [0, 1)");
+    require(s.dir[i].allFinite() && std::abs(s.dir[i].norm() - 1) <= 1e-6, "state", s.dir[i].norm(),
+            "unit section directions");
+  }
+  for (Index e = 0; e < ne; ++e) {
+    // A broken element has no stiffness or damping; a live one gets this engine's (setState).
+    const bool ok = s.alive[e] == 1 ? std::isfinite(s.stiffness[e]) && s.stiffness[e] > 0
+                                    : s.alive[e] == 0 && s.stiffness[e] == 0 && s.damping[e] == 0;
+    require(ok, "state", e, "a finite stiffness where alive, 0 stiffness and damping where broken (element)");
+  }
+  Breakage::check(f, s.breakage, s.alive);
+}
+
 void FabricEngine::setState(const KinematicState& s) {
-  require(static_cast<Index>(s.pos.size()) == fabric_->nNodes() && s.vel.size() == s.pos.size(), "state",
-          static_cast<double>(s.pos.size()), "a state with " + fmt(fabric_->nNodes()) + " nodes");
-  fabric_->pos = s.pos;
-  fabric_->vel = s.vel;
-  if (s.flat.size() == s.pos.size() && s.dir.size() == s.pos.size()) fabric_->secFlat = s.flat, fabric_->secDir = s.dir;
-  dynamics_.refreshForces();
-  dynamics_.setClock(s.step, s.time, s.lastDt);
+  checkState(s);  // everything first: nothing changes when the state is refused
+  Fabric& f = *fabric_;
+  f.pos = s.pos;
+  f.vel = s.vel;
+  f.secFlat = s.flat, f.secDir = s.dir;
+  // Live elements take this weave's stiffness and damping (addYarn's formulas, so the same bits as
+  // the run that saved the state when the materials are the same); broken ones none.
+  f.alive = s.alive;
+  for (Index e = 0; e < f.nElems(); ++e) {
+    const YarnMaterial& m = f.materials[f.yarns[f.elemYarn[e]].material];
+    const Real K = m.E * m.area / f.restLength[e], me = m.rho * m.area * f.restLength[e];
+    f.stiffness[e] = s.alive[e] ? K : 0.0;
+    f.damping[e] = s.alive[e] ? m.dampingRatio * std::sqrt(K * me) : 0.0;
+  }
+  dynamics_.restore(s.step, s.time, s.lastDt, s.books, s.booksStarted, s.springSeen, s.breakage);
   if (collisions_) collisions_->invalidateCache();
 }
 

@@ -44,7 +44,12 @@ class FabricEngine {
   /// Loads a saved state (same node count), bit for bit: positions, velocities, sections (when the
   /// state has them) and the clock, so the run goes on exactly as the saved one would have (the
   /// carried contacts are forgotten on both sides: saveState).
+  /// Everything is checked before anything changes (checkState): a refused state leaves the engine
+  /// as it was. The energy books, broken elements and breakage state come from the state too.
   void setState(const KinematicState& s);
+  /// Throws ParameterError ("state", "step", "time", "last_dt") unless s is a valid state of this
+  /// engine's fabric: sizes, topology fingerprint, clock, finite values, sections, elements, breakage.
+  void checkState(const KinematicState& s) const;
 
  private:
   std::unique_ptr<Fabric> fabric_;  // heap-held so the dynamics' reference stays valid

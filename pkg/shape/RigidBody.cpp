@@ -4,22 +4,32 @@
 
 namespace woven {
 
+// Physical ranges, not only finiteness: a velocity of 1e300 m/s or an infinite inertia passed a
+// finiteness or sign check and turned into NaN at the first impulse (README, Parameters).
 void RigidBody::validate() const {
   require(!parts.empty(), "parts", 0, "at least one Box or Sphere part");
+  const auto unit = [](const Quat& q) { return q.coeffs().allFinite() && std::abs(q.norm() - 1) < 1e-6; };
   for (const RigidPart& p : parts) {
     if (p.type == RigidPart::Type::Box)
-      require(p.halfSize.allFinite() && (p.halfSize.array() > 0).all(), "extents", p.halfSize.minCoeff(),
-              "(0, inf) m on every axis");
+      require(p.halfSize.allFinite() && p.halfSize.minCoeff() >= 1e-9 && p.halfSize.maxCoeff() <= 10, "extents",
+              p.halfSize.allFinite() ? p.halfSize.minCoeff() : NAN, "[1e-9, 10] m on every axis");
     else
-      require(std::isfinite(p.radius) && p.radius > 0, "radius", p.radius, "(0, inf) m");
-    require(p.offset.allFinite(), "offset", p.offset.norm(), "finite [m]");
+      require(std::isfinite(p.radius) && p.radius >= 1e-9 && p.radius <= 10, "radius", p.radius, "[1e-9, 10] m");
+    require(p.offset.allFinite() && p.offset.norm() <= 10, "offset", p.offset.norm(), "finite, |offset| <= 10 m");
+    require(unit(p.ori), "part orientation", p.ori.norm(), "a finite unit quaternion (|q| = 1 within 1e-6)");
   }
-  require(!std::isnan(mass) && mass >= 0, "mass", mass, "(0, inf] kg (0 or inf: kinematic body)");
-  require(!inertia.hasNaN() && (inertia.array() >= 0).all(), "inertia", inertia.minCoeff(), "[0, inf] kg m^2");
-  require(pos.allFinite(), "pos", pos.norm(), "finite [m]");
-  require(vel.allFinite(), "velocity", vel.norm(), "finite [m/s]");
-  require(angVel.allFinite(), "angular_velocity", angVel.norm(), "finite [rad/s]");
-  require(std::isfinite(ori.norm()) && std::abs(ori.norm() - 1) < 1e-6, "orientation", ori.norm(), "a unit quaternion");
+  require(!std::isnan(mass) && mass >= 0 && (mass <= 1e6 || std::isinf(mass)), "mass", mass,
+          "[0, 1e6] kg, or inf (0 or inf: kinematic body)");
+  if (dynamic())
+    require(inertia.allFinite() && (inertia.array() >= 0).all() && inertia.maxCoeff() <= 1e6, "inertia",
+            inertia.allFinite() ? inertia.maxCoeff() : NAN, "[0, 1e6] kg m^2 on each principal axis (finite)");
+  else
+    require(!inertia.hasNaN() && (inertia.array() >= 0).all(), "inertia", inertia.minCoeff(), "[0, inf] kg m^2");
+  require(pos.allFinite() && pos.cwiseAbs().maxCoeff() <= 1e3, "pos", pos.allFinite() ? pos.cwiseAbs().maxCoeff() : NAN,
+          "finite coordinates within [-1e3, 1e3] m");
+  require(vel.allFinite() && vel.norm() <= 1e5, "velocity", vel.norm(), "finite, |v| <= 1e5 m/s");
+  require(angVel.allFinite() && angVel.norm() <= 1e7, "angular_velocity", angVel.norm(), "finite, |w| <= 1e7 rad/s");
+  require(unit(ori), "orientation", ori.norm(), "a finite unit quaternion (|q| = 1 within 1e-6)");
 }
 
 }  // namespace woven

@@ -20,9 +20,12 @@ Real bisect(G g, Real lo, Real hi) {
 }
 }  // namespace
 
+// Arguments are named as the Python functions name them (p, h, D, crimp); finite physical ranges,
+// so that no NaN or infinity comes out.
 PeirceState peirceFromHeight(Real p, Real h, Real D) {
-  require(p > 0, "spacing", p, "(0, inf) m");
-  require(D > 0, "thickness", D, "(0, inf) m (sum of crossing yarn thicknesses)");
+  require(std::isfinite(p) && p >= 1e-8 && p <= 1, "p", p, "[1e-8, 1] m (yarn spacing)");
+  require(std::isfinite(D) && D >= 1e-8 && D <= 1, "D", D, "[1e-8, 1] m (sum of crossing yarn thicknesses)");
+  require(std::isfinite(h), "h", h, "finite [m] (crimp height)");
   PeirceState s;
   s.p = p, s.h = h, s.D = D;
   // Eliminating l: h(theta) = (p - D sin t) tan t + D (1 - cos t), increasing while p > D sin t
@@ -30,15 +33,15 @@ PeirceState peirceFromHeight(Real p, Real h, Real D) {
   const Real tmax = (p >= D) ? 0.5 * M_PI * (1 - 1e-12) : std::asin(p / D);
   auto hOf = [&](Real t) { return (p - D * std::sin(t)) * std::tan(t) + D * (1 - std::cos(t)); };
   const Real hmax = hOf(tmax);
-  require(h >= 0 && h < hmax, "crimp_height", h, "[0, " + fmt(hmax) + ") m for this spacing and thickness");
+  require(h >= 0 && h < hmax, "h", h, "[0, " + fmt(hmax) + ") m for this spacing and thickness");
   s.theta = h == 0 ? 0 : bisect([&](Real t) { return hOf(t) - h; }, 0.0, tmax);
   s.l = D * s.theta + (p - D * std::sin(s.theta)) / std::cos(s.theta);
   return s;
 }
 
 PeirceState peirceFromCrimp(Real p, Real crimp, Real D) {
-  require(p > 0, "spacing", p, "(0, inf) m");
-  require(D > 0, "thickness", D, "(0, inf) m");
+  require(std::isfinite(p) && p >= 1e-8 && p <= 1, "p", p, "[1e-8, 1] m (yarn spacing)");
+  require(std::isfinite(D) && D >= 1e-8 && D <= 1, "D", D, "[1e-8, 1] m (sum of crossing yarn thicknesses)");
   require(std::isfinite(crimp) && crimp >= 0 && crimp < 1, "crimp", crimp, "[0, 1)");
   PeirceState s;
   s.p = p, s.D = D;

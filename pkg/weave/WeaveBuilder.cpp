@@ -21,8 +21,14 @@ void WeaveParams::validate() const {
   weftSection.validate("weft_");
   warpMaterial.validate("warp_");
   weftMaterial.validate("weft_");
-  require(std::isfinite(warpSpacing) && warpSpacing > 0, "warp_spacing", warpSpacing, "(0, inf) m");
-  require(std::isfinite(weftSpacing) && weftSpacing > 0, "weft_spacing", weftSpacing, "(0, inf) m");
+  require(std::isfinite(warpSpacing) && warpSpacing > 0 && warpSpacing <= 1, "warp_spacing", warpSpacing, "(0, 1] m");
+  require(std::isfinite(weftSpacing) && weftSpacing > 0 && weftSpacing <= 1, "weft_spacing", weftSpacing, "(0, 1] m");
+  // Size before anything is allocated: nx = ny = 100000 passed the per-key ranges and ended in an
+  // allocation failure with an empty message.
+  const Real nodes = estimatedNodes();
+  require(nodes <= kMaxWeaveNodes, nx >= ny ? "nx" : "ny", nx >= ny ? nx : ny,
+          "nx, ny and cp_per_span giving at most " + fmt(kMaxWeaveNodes) + " nodes (about " +
+              fmt(kMaxWeaveNodes * 800 / 1e9) + " GB with collisions); these give " + fmt(nodes) + " nodes");
   require(warpSpacing >= warpSection.width, "warp_spacing", warpSpacing,
           "[warp_width = " + fmt(warpSection.width) + ", inf) m: neighbouring warp yarns would overlap");
   require(weftSpacing >= weftSection.width, "weft_spacing", weftSpacing,
@@ -31,6 +37,13 @@ void WeaveParams::validate() const {
           "[0, 1), or < 0 for Peirce's touching geometry");
   require(weftCrimp < 0 || (std::isfinite(weftCrimp) && weftCrimp < 1), "weft_crimp", weftCrimp,
           "[0, 1), or < 0 for Peirce's touching geometry");
+}
+
+Real WeaveParams::estimatedNodes() const {
+  // Each of NW warp yarns crosses NF wefts with cp_per_span CPs per span and about one span past its
+  // outer crossings, and the same for the wefts (an upper bound with adaptive resolution).
+  const Real NW = Real(ny) * pattern.rows(), NF = Real(nx) * pattern.cols(), n = cpPerSpan;
+  return NW * (NF * n + n + 1) + NF * (NW * n + n + 1);
 }
 
 namespace {

@@ -49,7 +49,13 @@ struct WeaveParams {
   Real fineX = NAN, fineY = NAN;  ///< fine centre [m] in the fabric's frame; NaN: the middle of the fabric
 
   void validate() const;       ///< throws ParameterError naming the parameter and range
+  /// Nodes the weave will have (an upper bound with adaptive resolution), for the size check.
+  Real estimatedNodes() const;
 };
+
+/// Largest weave buildWeave accepts [nodes]: about 800 bytes per node with collisions on (arrays of
+/// the nodes and CPs, bounds, pairs, caches), so 4 GB (README, Parameters).
+inline constexpr Real kMaxWeaveNodes = 5e6;
 
 struct WeaveSummary {
   int warpYarns = 0, weftYarns = 0;

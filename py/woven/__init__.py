@@ -33,6 +33,8 @@ def _ensure_yade():
 _ensure_yade()
 
 from . import _woven  # noqa: E402
+from . import _args  # noqa: E402
+_args.install(_woven)  # argument errors name the argument (before anything is imported from _woven)
 from ._woven import (FabricEngine, Fabric, Pattern, YarnMaterial, YarnSection, WeaveParams,  # noqa: E402,F401
                      InstabilityError, peirce_from_height, peirce_from_crimp, obb_contact, obb_first_contact,
                      set_threads, threads, openmp_threads)

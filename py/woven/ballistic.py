@@ -10,6 +10,7 @@ from yade import utils
 from yade._minieigenHP import Vector3
 
 from . import arrays, coupling
+from ._woven import MAX_WEAVE_NODES
 from .weave import weave, pattern
 
 _O = yade.wrapper.Omega()
@@ -44,12 +45,21 @@ def build_ply(weave_args, contact_args, side=0.0508, clamp=4, state='', breakage
             args['nx'] = max(1, int(round(side / (probe.summary['length_x'] / len(probe.weft_yarns)) / pat.cols)))
         if args.get('ny', 0) <= 0:
             args['ny'] = max(1, int(round(side / (probe.summary['length_y'] / len(probe.warp_yarns)) / pat.rows)))
+    # Size before building: side = 10 m gave 13400 x 13400 yarns and an empty MemoryError.
+    pat = pattern(args.get('pattern', 'plain'), args.get('twill_over', 2), args.get('twill_under', 1),
+                  args.get('satin_n', 5), args.get('satin_step', 2), args.get('basket_n', 2))
+    n = args.get('cp_per_span') or 4
+    nw, nf = float(args['ny']) * pat.rows, float(args['nx']) * pat.cols
+    nodes = nw * (nf * n + n + 1) + nf * (nw * n + n + 1)
+    if nodes > MAX_WEAVE_NODES:
+        key = 'side' if weave_args.get('nx', 0) <= 0 or weave_args.get('ny', 0) <= 0 else 'nx'
+        raise ValueError('%s = %r is invalid: allowed a ply of at most %d nodes (about %g GB; side, nx, ny and '
+                         'cp_per_span give %.3g nodes here)' % (key, side if key == 'side' else args['nx'],
+                                                                 MAX_WEAVE_NODES, MAX_WEAVE_NODES * 800 / 1e9, nodes))
     w = weave(**args)
     e = w.engine
     contact.enable(e, **contact_args)
     left = e.settle_sections()
-    if state:
-        e.load_state(state)
     held = w.warp_yarns + w.weft_yarns if clamp == 4 else (w.warp_yarns if clamp == 2 else [])
     for y in held:
         info = e.yarn(y)
@@ -57,6 +67,10 @@ def build_ply(weave_args, contact_args, side=0.0508, clamp=4, state='', breakage
         e.fix(info['first_node'] + info['n_nodes'] - 1)
     if breakage is not None:
         e.enable_breakage(**breakage)
+    if state:
+        # Last: a state saved with breakage brings its broken elements, strengths and filter back
+        # (enabling breakage after it would restart them); one saved without keeps these settings.
+        e.load_state(state)
     return Ply(w, left)
 
 

@@ -239,7 +239,8 @@ def collect(summary_files):
 
 
 def write_csv(path, rows):
-    with open(path, 'w') as f:
+    from .output import atomic_open  # a killed collector never leaves half a CSV
+    with atomic_open(path) as f:
         f.write('V_m_s,residual_m_s,perforated,seed,weibull_m,energy_balance_error,broken_elements,run,status\n')
         for r in rows:
             f.write('%.6g,%.6g,%d,%d,%.6g,%.4g,%d,%s,%s\n' % r)

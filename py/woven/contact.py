@@ -3,6 +3,8 @@
     woven.contact.enable(engine, mcd=0.6, restitution=0)   # same keys as CONTACT_KEYS, SI units
 """
 
+import math
+
 from . import _woven
 
 # key: (default, unit, description); the keys of FabricEngine.enable_collisions.
@@ -40,7 +42,38 @@ CONTACT_KEYS = {
 def penalty_dt_limit(m, k):
     """Largest stable time step [s] of a penalty contact of effective mass m [kg] and stiffness k [N/m]:
     2 sqrt(m / k) (central differences on an undamped spring; docs/collisions.md)."""
-    return _woven.penalty_dt_limit(float(m), float(k))
+    from ._args import finite
+    return _woven.penalty_dt_limit(finite('m', m, 0, 1e6, 'kg'), finite('k', k, 0, 1e15, 'N/m'))
+
+
+def _convert(key, value):
+    """A contact key's value as the type of its default; ValueError naming the key and what it allows
+    (a string given for a number raised Boost.Python's ArgumentError, 2.5 iterations became 2)."""
+    default, unit, doc = CONTACT_KEYS[key]
+    allowed = '%s%s' % (doc, (' [%s]' % unit) if unit else '')
+    if isinstance(default, bool):
+        if isinstance(value, bool) or (isinstance(value, (int, float)) and value in (0, 1)):
+            return bool(value)
+        if isinstance(value, str) and value.strip().lower() in ('0', '1', 'true', 'false'):
+            return value.strip().lower() in ('1', 'true')
+        raise ValueError('%s = %r is invalid: allowed 0/1 or True/False (%s)' % (key, value, allowed))
+    if isinstance(default, str):
+        if not isinstance(value, str):
+            raise ValueError('%s = %r is invalid: allowed %s' % (key, value, allowed))
+        return value
+    try:
+        if isinstance(value, (str, bytes)) or value is None:
+            raise TypeError
+        f = float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError('%s = %r is invalid: allowed a number: %s' % (key, value, allowed)) from None
+    if isinstance(default, int):
+        if not (math.isfinite(f) and f == int(f) and abs(f) < 2 ** 31):
+            raise ValueError('%s = %r is invalid: allowed an integer: %s' % (key, value, allowed))
+        return int(f)
+    if math.isnan(f):
+        raise ValueError('%s = %r is invalid: allowed a number: %s' % (key, value, allowed))
+    return f
 
 
 def enable(engine, **kw):
@@ -48,9 +81,6 @@ def enable(engine, **kw):
     bad = sorted(set(kw) - set(CONTACT_KEYS))
     if bad:
         raise ValueError('unknown contact key(s) %s: allowed %s' % (', '.join(bad), ', '.join(sorted(CONTACT_KEYS))))
-    args = {k: kw.get(k, v[0]) for k, v in CONTACT_KEYS.items()}
-    for k in ('max_iterations', 'flatten_passes', 'self_exclude', 'threads', 'projection_sweeps'):
-        args[k] = int(args[k])
-    args['yarn_contacts'] = bool(int(args['yarn_contacts'])) if not isinstance(args['yarn_contacts'], bool) else args['yarn_contacts']
+    args = {k: _convert(k, kw[k]) if k in kw else v[0] for k, v in CONTACT_KEYS.items()}
     engine.enable_collisions(**args)
     return engine

@@ -10,6 +10,7 @@ with the body's mass and inertia), and their new velocities and pose are written
 few attribute reads and writes per body per step, nothing per yarn node. Units SI.
 """
 import math
+import numbers
 import yade.wrapper
 from yade._minieigenHP import Quaternion, Vector3
 
@@ -45,8 +46,17 @@ def couple(engine, ids):
     """
     if not engine.collisions_enabled:
         raise ValueError('collisions = off is invalid: allowed on (woven.contact.enable(engine) before couple)')
+    ids = list(ids)
+    coupled = {engine.body(k)['id'] for k in range(engine.n_bodies)}
     out = []
     for i in ids:
+        if isinstance(i, bool) or not isinstance(i, numbers.Integral):
+            raise ValueError('body id = %r is invalid: allowed an integer id of O.bodies' % (i,))
+        # Coupled twice, a body would take every impulse twice.
+        if i in coupled:
+            raise ValueError('body id = %d is invalid: allowed a body not coupled to this engine yet (each body once)' % i)
+        i = int(i)
+        coupled.add(i)
         if not (0 <= i < len(_O.bodies)) or _O.bodies[i] is None:
             raise ValueError('body id = %r is invalid: allowed an id of O.bodies (0..%d)' % (i, len(_O.bodies) - 1))
         b = _O.bodies[i]

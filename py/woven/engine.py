@@ -12,6 +12,8 @@ with the fabric on the same (x_n, v_{n+1/2}) as the yarns, and moves them with t
 """
 import yade.wrapper
 
+from ._woven import FabricEngine
+
 _O = yade.wrapper.Omega()
 _registry = {}
 last_error = None  #: the last exception a woven step raised (InstabilityError keeps step, node, cause)
@@ -46,13 +48,25 @@ def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
     if steppers:
         raise ValueError('O.engines holds %s, which changes O.dt; woven needs O.dt <= dt_crit: set '
                          'O.engines yourself (a fresh scene has YADE\'s defaults) or make it dead' % ', '.join(steppers))
-    if not (0 < safety <= 1):
+    if not isinstance(engine, FabricEngine):
+        raise ValueError('engine = %r is invalid: allowed a woven.FabricEngine' % (engine,))
+    if isinstance(safety, bool) or not isinstance(safety, (int, float)) or not (0 < safety <= 1):
         raise ValueError('safety = %r is invalid: allowed (0, 1]' % (safety,))
     if set_dt:
         _O.dt = safety * engine.dt_crit
     elif not (0 < _O.dt <= engine.dt_crit * (1 + 1e-12)):
         raise ValueError('dt = %.12g is invalid: allowed (0, dt_crit = %.12g] s (stable limit of the chain; '
                          'set O.dt below it or attach(..., set_dt=True))' % (_O.dt, engine.dt_crit))
+    # The same engine twice would step the fabric twice per YADE iteration (with YADE's O.dt each).
+    for e in _O.engines:
+        if isinstance(e, yade.wrapper.PyRunner) and e.command.startswith('_woven_step('):
+            try:
+                k = int(e.command[len('_woven_step('):-1])
+            except ValueError:
+                continue
+            if k in _registry and _registry[k][0] is engine:
+                raise ValueError('engine = %r is invalid: allowed an engine not attached yet (it is already in '
+                                 'O.engines as %r; attach each engine once)' % (engine, e.command))
     key = len(_registry)
     # Bodies coupled to the fabric (woven.coupling) were already moved over this iteration's step
     # when a NewtonIntegrator runs before the adapter: the step rewinds them to x_n first.

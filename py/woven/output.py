@@ -1,7 +1,68 @@
-"""Output folders and summary.json: measured figures beside their reference figures, with units."""
+"""Output folders and summary.json: measured figures beside their reference figures, with units.
+
+Every file woven writes is written atomically (atomic_path, atomic_open, write_text_atomic,
+savetxt, savefig): into a temporary in the same folder, flushed, fsync'ed and renamed over the
+target, so a failed or killed run never leaves a half-written summary.json or CSV where the previous
+complete one was (state files do the same in C++, pkg/fabric/StateIO.cpp).
+"""
+import contextlib
 import json
 import math
 import os
+import tempfile
+
+
+@contextlib.contextmanager
+def atomic_path(path):
+    """Yields a temporary path beside `path` (same folder, same extension, so writers that pick the
+    format from the name still work); on success its bytes are fsync'ed and it is renamed onto `path`,
+    on an exception it is removed and `path` is untouched."""
+    if not isinstance(path, (str, os.PathLike)) or '\0' in os.fspath(path):
+        raise ValueError('path = %r is invalid: allowed a file path without NUL characters' % (path,))
+    path = os.fspath(path)
+    folder, name = os.path.split(os.path.abspath(path))
+    stem, ext = os.path.splitext(name)
+    fd, tmp = tempfile.mkstemp(prefix='.%s.' % stem, suffix='.tmp' + ext, dir=folder)
+    os.close(fd)
+    try:
+        yield tmp
+        with open(tmp, 'rb+') as f:
+            os.fsync(f.fileno())
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.remove(tmp)
+        raise
+
+
+@contextlib.contextmanager
+def atomic_open(path, mode='w'):
+    """open() for writing, atomically (atomic_path): the file appears whole or not at all."""
+    with atomic_path(path) as tmp:
+        with open(tmp, mode) as f:
+            yield f
+            f.flush()
+
+
+def write_text_atomic(path, text):
+    with atomic_open(path) as f:
+        f.write(text)
+
+
+def savetxt(path, *args, **kw):
+    """numpy.savetxt, atomically."""
+    import numpy as np
+    with atomic_path(path) as tmp:
+        np.savetxt(tmp, *args, **kw)
+
+
+def savefig(fig, path, **kw):
+    """matplotlib's fig.savefig, atomically."""
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, **kw)
 
 
 def out_dir(name, params):
@@ -37,6 +98,6 @@ def write_summary(directory, name, params, measured, reference, units, status, c
     if extra:
         s.update(extra)
     path = os.path.join(directory, 'summary.json')
-    with open(path, 'w') as f:
+    with atomic_open(path) as f:
         json.dump(_clean(s), f, indent=2, sort_keys=False)
     return s

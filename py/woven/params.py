@@ -6,6 +6,7 @@ Each default is (value, unit, description); the value's type (float, int, bool, 
 the key is read as. Precedence: defaults < yade-batch table line (YADE_BATCH) < command line.
 Unknown keys and unparsable values raise ValueError naming the key and what is allowed.
 """
+import math
 import os
 import sys
 
@@ -34,7 +35,8 @@ def _convert(key, text, default):
             raise ValueError
         if isinstance(default, int):
             f = float(t)
-            if f != int(f):
+            # Past 2^53 a float no longer holds every integer (and 1e300 is no count of anything).
+            if not (math.isfinite(f) and abs(f) <= 2 ** 53) or f != int(f):
                 raise ValueError
             return int(f)
         if isinstance(default, float):
@@ -47,7 +49,7 @@ def _convert(key, text, default):
                     pass
         return t
     except ValueError:
-        kind = {bool: '0/1/true/false', int: 'an integer', float: 'a number'}.get(type(default), 'text')
+        kind = {bool: '0/1/true/false', int: 'an integer in [-2^53, 2^53]', float: 'a number'}.get(type(default), 'text')
         raise ValueError('%s = %r is invalid: allowed %s' % (key, text, kind)) from None
 
 

@@ -1,5 +1,30 @@
-"""Closed-form references the scenes are checked against (physics-reference.md). SI units."""
+"""Closed-form references the scenes are checked against (physics-reference.md). SI units.
+
+Every argument is checked against a physical range (the same as the weave keys' where they overlap)
+and refused naming it: NaN, infinities and zero spacings gave NaN, inf or ZeroDivisionError.
+"""
 import math
+
+from ._args import finite as _finite
+
+
+def _E(E):
+    return _finite('E', E, 1e5, 1e13, 'Pa')
+
+
+def _rho(rho):
+    return _finite('rho', rho, 1, 1e5, 'kg/m^3')
+
+
+def _array(name, x, lo, hi, unit):
+    import numpy as np
+    try:
+        a = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError('%s = %r is invalid: allowed numbers in [%g, %g] %s' % (name, x, lo, hi, unit)) from None
+    if a.size == 0 or not np.all(np.isfinite(a)) or np.any(a < lo) or np.any(a > hi):
+        raise ValueError('%s = %r is invalid: allowed finite numbers in [%g, %g] %s' % (name, x, lo, hi, unit))
+    return a
 
 
 def smith(V, E, rho):
@@ -9,8 +34,8 @@ def smith(V, E, rho):
     Returns dict: c [m/s], strain [-], w = c*eps [m/s] (material flow), U_L = c*sqrt(eps/(1+eps))
     [m/s] (material frame) and U_E = c*(sqrt(eps*(1+eps)) - eps) [m/s] (lab frame).
     """
-    if not (E > 0 and rho > 0 and V > 0 and math.isfinite(V)):
-        raise ValueError('smith: need E > 0 Pa, rho > 0 kg/m^3, V > 0 m/s; got %r, %r, %r' % (E, rho, V))
+    E, rho = _E(E), _rho(rho)
+    V = _finite('V', V, 1e-6, 1e5, 'm/s')
     c = math.sqrt(E / rho)
 
     def speed(e):
@@ -32,13 +57,19 @@ def smith(V, E, rho):
 
 def smith_critical_velocity(failure_strain, E, rho):
     """Impact speed [m/s] at which the strain behind the front reaches failure_strain."""
-    c = math.sqrt(E / rho)
-    e = failure_strain
+    e = _finite('failure_strain', failure_strain, 1e-12, 10, '')
+    c = math.sqrt(_E(E) / _rho(rho))
     return c * math.sqrt(2 * e * math.sqrt(e * (1 + e)) - e * e)
 
 
 def areal_density_plain(linear_density_warp, spacing_warp, crimp_warp, linear_density_weft, spacing_weft, crimp_weft):
     """Areal density [kg/m^2] of a woven fabric: sum over families of lambda*(1 + crimp)/spacing."""
+    linear_density_warp = _finite('linear_density_warp', linear_density_warp, 0, 1e3, 'kg/m')
+    linear_density_weft = _finite('linear_density_weft', linear_density_weft, 0, 1e3, 'kg/m')
+    spacing_warp = _finite('spacing_warp', spacing_warp, 1e-8, 1, 'm')
+    spacing_weft = _finite('spacing_weft', spacing_weft, 1e-8, 1, 'm')
+    crimp_warp = _finite('crimp_warp', crimp_warp, 0, 0.999999, '')
+    crimp_weft = _finite('crimp_weft', crimp_weft, 0, 0.999999, '')
     return (linear_density_warp * (1 + crimp_warp) / spacing_warp
             + linear_density_weft * (1 + crimp_weft) / spacing_weft)
 
@@ -47,7 +78,10 @@ def lambert_jonas(V, V_bl, a, p):
     """Lambert-Jonas residual velocity [m/s]: a (V^p - V_bl^p)^(1/p) above the ballistic limit V_bl
     [m/s], 0 below it (Lambert & Jonas, BRL R-1852, 1976)."""
     import numpy as np
-    V = np.asarray(V, dtype=float)
+    V = _array('V', V, 0, 1e5, 'm/s')
+    V_bl = _finite('V_bl', V_bl, 0, 1e5, 'm/s')
+    a = _finite('a', a, 0, 1, '')
+    p = _finite('p', p, 0.1, 100, '')
     return np.where(V > V_bl, a * np.maximum(V ** p - V_bl ** p, 0.0) ** (1.0 / p), 0.0)
 
 
@@ -59,10 +93,13 @@ def fit_lambert_jonas(V, vr, p_range=(1.0, 4.0)):
     best pair is refined on a finer grid. Returns dict V_bl (the V50 the fit gives) [m/s], a [-], p
     [-], rms [m/s]. Raises ValueError with fewer than 3 points or no perforation at all."""
     import numpy as np
-    V = np.asarray(V, dtype=float)
-    vr = np.asarray(vr, dtype=float)
-    if len(V) < 3 or len(V) != len(vr):
-        raise ValueError('runs = %d is invalid: allowed at least 3 (V, residual velocity) pairs' % len(V))
+    V = _array('V', V, 1e-6, 1e5, 'm/s')
+    vr = _array('vr', vr, 0, 1e5, 'm/s')
+    p_range = (_finite('p_range[0]', p_range[0], 0.1, 100, ''), _finite('p_range[1]', p_range[1], 0.1, 100, ''))
+    if p_range[1] < p_range[0]:
+        raise ValueError('p_range = %r is invalid: allowed (low, high) with low <= high in [0.1, 100]' % (p_range,))
+    if V.ndim != 1 or vr.ndim != 1 or len(V) < 3 or len(V) != len(vr):
+        raise ValueError('runs = %d is invalid: allowed at least 3 (V, residual velocity) pairs of equal length' % V.size)
     if not np.any(vr > 0):
         raise ValueError('residual velocities are all 0: no run perforated, the V50 lies above %.1f m/s' % V.max())
 

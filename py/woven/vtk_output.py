@@ -14,6 +14,7 @@ import os
 import numpy as np
 
 from . import arrays
+from .output import atomic_open, atomic_path
 
 
 def _vtk():
@@ -126,20 +127,21 @@ class Recorder:
         names = []
         for stem, poly in (('yarns', yarn_tubes(self.engine, self.rings)), ('bodies', body_surfaces(self.engine))):
             name = '%s_%05d.vtp' % (stem, i)
-            w = vtk.vtkXMLPolyDataWriter()
-            w.SetFileName(os.path.join(self.dir, name))
-            w.SetInputData(poly)
-            w.SetDataModeToAppended()
-            w.SetCompressorTypeToZLib()
-            if not w.Write():
-                raise IOError('VTK could not write %s' % os.path.join(self.dir, name))
+            with atomic_path(os.path.join(self.dir, name)) as tmp:
+                w = vtk.vtkXMLPolyDataWriter()
+                w.SetFileName(tmp)
+                w.SetInputData(poly)
+                w.SetDataModeToAppended()
+                w.SetCompressorTypeToZLib()
+                if not w.Write():
+                    raise IOError('VTK could not write %s' % os.path.join(self.dir, name))
             names.append(name)
         self.frames.append((time, names))
         self.close()
         return [os.path.join(self.dir, n) for n in names]
 
     def close(self):
-        with open(os.path.join(self.dir, 'frames.pvd'), 'w') as f:
+        with atomic_open(os.path.join(self.dir, 'frames.pvd')) as f:
             f.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n<Collection>\n')
             for t, names in self.frames:
                 for part, n in enumerate(names):

@@ -4,7 +4,10 @@
     w.engine       # woven.FabricEngine
     w.summary      # dict of measured figures (areal density, crimp, clearances, counts)
 """
+import math
+
 from . import _woven
+from ._args import finite as _finite
 
 # key: (default, unit, description). None = keep the preset's value.
 WEAVE_KEYS = {
@@ -41,16 +44,46 @@ WEAVE_KEYS = {
 }
 
 
+# Allowed range of each numeric key, as the errors state it (the C++ side checks the same ranges).
+WEAVE_RANGES = {
+    'twill_over': (1, 1000, ''), 'twill_under': (1, 1000, ''), 'satin_n': (3, 1000, ''), 'satin_step': (1, 1000, ''),
+    'basket_n': (1, 1000, ''), 'nx': (1, 100000, ''), 'ny': (1, 100000, ''),
+    'spacing': (1e-8, 1, 'm'), 'warp_spacing': (1e-8, 1, 'm'), 'weft_spacing': (1e-8, 1, 'm'),
+    'width': (1e-8, 1, 'm'), 'thickness': (1e-8, 1, 'm'), 'E': (1e5, 1e13, 'Pa'), 'rho': (1, 1e5, 'kg/m^3'),
+    'area': (1e-16, 1e-2, 'm^2'), 'linear_density': (1e-16, 1e3, 'kg/m'), 'damping': (0, 9.999, ''),
+    'failure_strain': (1e-12, 10, ''), 'tension_only': (0, 1, ''), 'crimp': (-1e300, 0.999999, ''),
+    'warp_crimp': (-1e300, 0.999999, ''), 'weft_crimp': (-1e300, 0.999999, ''), 'cp_per_span': (1, 1000, ''),
+    'fine_radius': (-1e300, 1e3, 'm'), 'cp_coarse': (1, 1000, ''), 'fine_x': (-1e3, 1e3, 'm'), 'fine_y': (-1e3, 1e3, 'm'),
+}
+_INTEGER_KEYS = ('twill_over', 'twill_under', 'satin_n', 'satin_step', 'basket_n', 'nx', 'ny', 'cp_per_span',
+                 'cp_coarse', 'tension_only')
+
+
+def _num(key, value):
+    """A key's value as a number in its WEAVE_RANGES range; ValueError naming the key otherwise."""
+    lo, hi, unit = WEAVE_RANGES[key]
+    return _finite(key, value, lo, hi, unit, integer=key in _INTEGER_KEYS)
+
+
 def pattern(name='plain', twill_over=2, twill_under=1, satin_n=5, satin_step=2, basket_n=2):
-    """A woven.Pattern from a name or a matrix (list of lists, or text '1,0;0,1')."""
+    """A woven.Pattern from a name or a matrix (list of lists, or text '1,0;0,1'). Entries must be
+    exactly 0 or 1 (1.7 is refused, not truncated)."""
     if isinstance(name, (list, tuple)):
-        return _woven.Pattern([list(map(int, r)) for r in name])
+        try:
+            rows = [list(r) for r in name]
+        except TypeError:
+            raise ValueError("pattern = %r is invalid: allowed a 0/1 matrix (list of rows)" % (name,)) from None
+        return _woven.Pattern(rows)
     if isinstance(name, str) and (';' in name or ',' in name):
         rows = [r for r in name.replace(' ', '').split(';') if r]
         try:
-            return _woven.Pattern([[int(v) for v in r.split(',')] for r in rows])
+            return _woven.Pattern([[float(v) for v in r.split(',')] for r in rows])
         except ValueError:
             raise ValueError("pattern = %r is invalid: allowed a 0/1 matrix written '1,0;0,1'" % name) from None
+    if not isinstance(name, str):
+        raise ValueError("pattern = %r is invalid: allowed plain, twill, satin, basket or a 0/1 matrix '1,0;0,1'" % (name,))
+    twill_over, twill_under = _num('twill_over', twill_over), _num('twill_under', twill_under)
+    satin_n, satin_step, basket_n = _num('satin_n', satin_n), _num('satin_step', satin_step), _num('basket_n', basket_n)
     if name == 'twill':
         return _woven.Pattern.twill(twill_over, twill_under)
     if name == 'satin':
@@ -103,35 +136,41 @@ def weave(**kw):
     else:
         raise ValueError("preset = %r is invalid: allowed 'km2_706' or 'none'" % a['preset'])
     pat = pattern(a['pattern'], a['twill_over'], a['twill_under'], a['satin_n'], a['satin_step'], a['basket_n'])
+    # Every value read as a number of its key's range here, so that a string or an absurd value is
+    # refused naming the key (float('abc') said only "could not convert string to float").
+    num = {k: _num(k, a[k]) for k in WEAVE_RANGES if k in a and a[k] is not None and k not in (
+        'twill_over', 'twill_under', 'satin_n', 'satin_step', 'basket_n')}
     P.pattern = pat
-    P.nx, P.ny = int(a['nx']), int(a['ny'])
+    P.nx, P.ny = num['nx'], num['ny']
     for fam in ('warp', 'weft'):
-        sp = a[fam + '_spacing'] if a[fam + '_spacing'] is not None else a['spacing']
+        sp = num.get(fam + '_spacing', num.get('spacing'))
         if sp is not None:
-            setattr(P, fam + '_spacing', float(sp))
+            setattr(P, fam + '_spacing', sp)
         sec, mat = getattr(P, fam + '_section'), getattr(P, fam + '_material')
         for key in ('width', 'thickness'):
-            if a[key] is not None:
-                setattr(sec, key, float(a[key]))
+            if key in num:
+                setattr(sec, key, num[key])
         for key in ('E', 'rho', 'area', 'damping', 'failure_strain'):
-            if a[key] is not None:
-                setattr(mat, key, float(a[key]))
-        if a['linear_density'] is not None:
-            if not float(a['linear_density']) > 0:
-                raise ValueError('linear_density = %r is invalid: allowed (0, inf) kg/m' % a['linear_density'])
-            mat.area = float(a['linear_density']) / mat.rho
-        if a['tension_only'] is not None:
-            mat.tension_only = bool(a['tension_only'])
+            if key in num:
+                setattr(mat, key, num[key])
+        if 'linear_density' in num:
+            area = num['linear_density'] / mat.rho
+            if not (1e-16 <= area <= 1e-2):
+                raise ValueError('linear_density = %r is invalid: allowed a value giving area = linear_density / rho '
+                                 'in [1e-16, 1e-2] m^2 (here %g m^2)' % (a['linear_density'], area))
+            mat.area = area
+        if 'tension_only' in num:
+            mat.tension_only = bool(num['tension_only'])
         setattr(P, fam + '_section', sec)
         setattr(P, fam + '_material', mat)
-        cr = a[fam + '_crimp'] if a[fam + '_crimp'] is not None else a['crimp']
+        cr = num.get(fam + '_crimp', num.get('crimp'))
         if cr is not None:
-            setattr(P, fam + '_crimp', float(cr))
-    if a['cp_per_span'] is not None:
-        P.cp_per_span = int(a['cp_per_span'])
-    for key, conv in (('fine_radius', float), ('cp_coarse', int), ('fine_x', float), ('fine_y', float)):
-        if a[key] is not None:
-            setattr(P, key, conv(a[key]))
+            setattr(P, fam + '_crimp', cr)
+    if 'cp_per_span' in num:
+        P.cp_per_span = num['cp_per_span']
+    for key in ('fine_radius', 'cp_coarse', 'fine_x', 'fine_y'):
+        if key in num:
+            setattr(P, key, num[key])
     engine, s, warp, weft = _woven.build_weave(P)
     summary = _summary_dict(s)
     summary['cp_per_span'] = P.cp_per_span

@@ -13,6 +13,7 @@ from yade import utils
 from yade._minieigenHP import Vector3
 
 from . import yade_grid as yg
+from .output import savetxt
 
 _O = yade.wrapper.Omega()
 
@@ -214,7 +215,7 @@ def ballistic(p, d, weave_keys, contact_keys):
     import os
     keys = list(rows[0].keys())
     S = np.array([[r[k] for k in keys] for r in rows])
-    np.savetxt(os.path.join(d, 'series.csv'), S, delimiter=',', comments='', header=','.join(keys))
+    savetxt(os.path.join(d, 'series.csv'), S, delimiter=',', comments='', header=','.join(keys))
     v_res = -proj.state.vel[2]
     ke_p = rows[-1]['ke_projectile']
     perforated = st['outcome'] == 'perforated'
@@ -325,7 +326,7 @@ def tension(p, d, weave_args):
     O.run(steps, True)
     wall = time.time() - wall0
     C = np.array(rows)
-    np.savetxt(os.path.join(d, 'curve.csv'), C, delimiter=',', comments='', header='time_s,strain,force_N,overlap_m')
+    savetxt(os.path.join(d, 'curve.csv'), C, delimiter=',', comments='', header='time_s,strain,force_N,overlap_m')
     info = e.yarn(w.warp_yarns[0])
     EA = info['E'] * info['area']
     eps, F = C[:, 1], C[:, 2]

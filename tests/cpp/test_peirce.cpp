@@ -101,17 +101,23 @@ TEST(Peirce, SmallCrimpLimitIsHalfTheSquaredSlope) {
 }
 
 TEST(Peirce, BadInputNamesTheParameter) {
-  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(0, 1e-4, kD); }), "spacing");
-  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(-kP, 1e-4, kD); }), "spacing");
-  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(kP, 1e-4, 0); }), "thickness");
-  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(kP, -1e-6, kD); }), "crimp_height");
+  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(0, 1e-4, kD); }), "p");
+  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(-kP, 1e-4, kD); }), "p");
+  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(kP, 1e-4, 0); }), "D");
+  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(kP, -1e-6, kD); }), "h");
   // p < D: the largest height is reached at sin(theta) = p/D; above it is unreachable.
-  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(0.5 * kD, 10 * kD, kD); }), "crimp_height");
-  EXPECT_EQ(parameterOf([] { woven::peirceFromCrimp(0, 0.01, kD); }), "spacing");
-  EXPECT_EQ(parameterOf([] { woven::peirceFromCrimp(kP, 0.01, -kD); }), "thickness");
+  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(0.5 * kD, 10 * kD, kD); }), "h");
+  EXPECT_EQ(parameterOf([] { woven::peirceFromCrimp(0, 0.01, kD); }), "p");
+  EXPECT_EQ(parameterOf([] { woven::peirceFromCrimp(kP, 0.01, -kD); }), "D");
   EXPECT_EQ(parameterOf([] { woven::peirceFromCrimp(kP, -0.01, kD); }), "crimp");
   EXPECT_EQ(parameterOf([] { woven::peirceFromCrimp(kP, 1.0, kD); }), "crimp");
   EXPECT_EQ(parameterOf([] { woven::peirceFromCrimp(kP, NAN, kD); }), "crimp");
+  // Named as the Python arguments (p, h, D, crimp); infinities and NaN never pass (they came out as NaN).
+  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(INFINITY, 1e-4, kD); }), "p");
+  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(kP, NAN, kD); }), "h");
+  EXPECT_EQ(parameterOf([] { woven::peirceFromHeight(kP, 1e-4, INFINITY); }), "D");
+  EXPECT_EQ(parameterOf([] { woven::peirceFromCrimp(NAN, 0.01, kD); }), "p");
+  EXPECT_EQ(parameterOf([] { woven::peirceFromCrimp(kP, 0.01, 1e300); }), "D");
   // p = 0.1 D, c = 0.5: l = 0.15 D < D*pi/2 and even the shortest chord D sin(l/D) = 0.149 D > p.
   EXPECT_EQ(parameterOf([] { woven::peirceFromCrimp(0.1 * kD, 0.5, kD); }), "crimp");
 }
