@@ -176,7 +176,7 @@ void saveState(const std::string& path, const KinematicState& s) {
   w.arr(s.alive), w.arr(s.stiffness), w.arr(s.damping);
   w.put(std::uint8_t(s.booksStarted)), w.put(std::uint8_t(s.springSeen));
   const EnergyBooks& b = s.books;
-  for (Real v : {b.kinetic, b.elastic, b.damped, b.work, b.bodyWork, b.contact, b.contactInput, b.spring, b.released, b.initial})
+  for (Real v : {b.kinetic, b.elastic, b.damped, b.work, b.bodyWork, b.contact, b.contactInput, b.spring, b.released, b.initial, b.projection})
     w.put(v);
   const BreakageParams& p = s.breakage.params;
   w.put(std::uint8_t(p.enabled)), w.put(p.threshold), w.put(p.filterLength), w.put(p.weibullModulus), w.put(p.seed);
@@ -248,7 +248,7 @@ KinematicState loadState(const std::string& path, long expectNodes) {
   r.arr(s.alive, ne), r.arr(s.stiffness, ne), r.arr(s.damping, ne);
   s.booksStarted = r.get<std::uint8_t>() != 0, s.springSeen = r.get<std::uint8_t>() != 0;
   EnergyBooks& b = s.books;
-  for (Real* v : {&b.kinetic, &b.elastic, &b.damped, &b.work, &b.bodyWork, &b.contact, &b.contactInput, &b.spring, &b.released, &b.initial})
+  for (Real* v : {&b.kinetic, &b.elastic, &b.damped, &b.work, &b.bodyWork, &b.contact, &b.contactInput, &b.spring, &b.released, &b.initial, &b.projection})
     *v = r.get<Real>();
   BreakageParams& p = s.breakage.params;
   p.enabled = r.get<std::uint8_t>() != 0;
@@ -286,7 +286,7 @@ KinematicState loadState(const std::string& path, long expectNodes) {
                      (s.alive[e] ? s.stiffness[e] > 0 : s.stiffness[e] == 0 && s.damping[e] == 0);
     if (!okK) bad("stiffness/damping of element " + fmt(e), "finite values, > 0 stiffness for a live element, 0 for a broken one");
   }
-  for (Real v : {b.kinetic, b.elastic, b.damped, b.work, b.bodyWork, b.contact, b.contactInput, b.spring, b.released, b.initial})
+  for (Real v : {b.kinetic, b.elastic, b.damped, b.work, b.bodyWork, b.contact, b.contactInput, b.spring, b.released, b.initial, b.projection})
     if (!std::isfinite(v)) bad("energy book " + fmt(v), "finite energies [J]");
   if (b.kinetic < 0 || b.elastic < 0 || b.damped < 0 || b.contactInput < 0 || b.released < 0 || b.spring < 0)
     bad("a negative energy book", "kinetic, elastic, damped, contact input, spring and released energies >= 0 J");

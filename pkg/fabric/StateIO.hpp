@@ -7,8 +7,8 @@
 //   i64 step f64 time f64 last_dt
 //   nodes x (3 f64 position) nodes x (3 f64 velocity) nodes x f64 section eps nodes x (3 f64 section dir)
 //   elements x u8 alive, elements x f64 stiffness, elements x f64 damping
-//   u8 books_started u8 spring_seen 10 x f64 books (kinetic elastic damped work body_work contact
-//       contact_input spring released initial)
+//   u8 books_started u8 spring_seen 11 x f64 books (kinetic elastic damped work body_work contact
+//       contact_input spring released initial projection)
 //   u8 breakage_enabled f64 threshold f64 filter_length f64 weibull_m u64 seed
 //   i64 n_strength, n_strength x f64; i64 n_filtered, n_filtered x f64
 //   i64 n_breaks, n_breaks x (i64 step f64 time i32 yarn i32 element 3 f64 position f64 strain
