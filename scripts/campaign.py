@@ -93,7 +93,9 @@ print('campaign: %d runs (%d velocities x %d seeds), backend %s, %d jobs%s -> %s
       % (len(runs), len(velocities), len(seeds), p.backend, p.jobs, (', scheduler ' + p.scheduler) if p.scheduler else '', d))
 sys.stdout.flush()
 t0 = time.time()
-res = campaign.execute(runs, backend=p.backend, jobs=p.jobs, scheduler=p.scheduler, yade=p.yade)
+here = os.path.dirname(os.path.abspath(sys.argv[0]))  # under yade -x, __file__ is yade's own
+res = campaign.execute(runs, backend=p.backend, jobs=p.jobs, scheduler=p.scheduler, yade=p.yade,
+                       script=os.path.join(here, 'ballistic.py'))
 wall = time.time() - t0
 incomplete = [r['name'] for r in runs if not campaign.is_complete(r)]
 failed = [x for x in res['done'] if x['returncode'] != 0]

@@ -116,8 +116,6 @@ void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kin
   c.boxDepth = 0, c.time = 0;
 }
 
-// Closest point of CP b's axis to the point p, as its weight t in [0, 1].
-Real closestOnAxis(const Fabric& f, Index b, const Vec3& p) { return alongCP(f, b, p); }
 }  // namespace
 
 SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule) {
@@ -158,7 +156,7 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
       const Real at[2] = {n == 2 ? lo : 0.5 * (lo + hi), hi};
       for (int k = 0; k < n; ++k) {
         const Real s = at[k];
-        fillPair(f, a, b, s, closestOnAxis(f, b, (1 - s) * f.pos[i] + s * f.pos[i + 1]), ContactKind::Side, rule,
+        fillPair(f, a, b, s, alongCP(f, b, (1 - s) * f.pos[i] + s * f.pos[i + 1]), ContactKind::Side, rule,
                  orient, true, out[k]);
       }
       return n;
@@ -176,13 +174,13 @@ void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections) {
   const Index i = f.elem0[c.cpA], j = f.elem0[c.cpB];
   Real s = c.sA, t;
   if (c.kind == ContactKind::Side) {
-    t = closestOnAxis(f, c.cpB, (1 - s) * f.pos[i] + s * f.pos[i + 1]);
+    t = alongCP(f, c.cpB, (1 - s) * f.pos[i] + s * f.pos[i + 1]);
   } else {
     const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
     s = sc.s, t = sc.t;
   }
   const Vec3 orient = c.normal;
-  fillPair(f, c.cpA, c.cpB, s, t, c.kind == ContactKind::Paper ? ContactKind::Cross : c.kind, rule, &orient, sections, c);
+  fillPair(f, c.cpA, c.cpB, s, t, c.kind, rule, &orient, sections, c);
 }
 
 bool closestOnEllipse(Real a, Real b, Real px, Real py, Real& qx, Real& qy) {

@@ -43,6 +43,17 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     return scale * dl;
   };
   const auto movedBefore = [&](Index k) { return movedBefore_[k] != 0; };
+  // Moves the n nodes of a contact by dl along its gradient (w_k n, weighted by 1/m_k).
+  const auto move = [&](const Index* node, const Real* w, int n, Real dl, const Vec3& normal) {
+    for (int k = 0; k < n; ++k)
+      if (w[k] != 0 && f.invMass[node[k]] > 0) {
+        touch(node[k]);
+        const Real step = w[k] * f.invMass[node[k]] * dl;
+        f.pos[node[k]] += step * normal;
+        travel_[node[k]] += std::abs(step);
+        movedNow_[node[k]] = 1;
+      }
+  };
   for (int sweep = 0; sweep < sweeps; ++sweep) {
     ++rep.sweeps;
     bool moved = false, bodyMovedNow = false;
@@ -67,14 +78,7 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
       if (!(K > 0)) continue;  // both CPs kinematic
       const Real dl = share(node, w, 4, -C / K);
       if (dl == 0) continue;
-      for (int k = 0; k < 4; ++k)
-        if (w[k] != 0 && f.invMass[node[k]] > 0) {
-          touch(node[k]);
-          const Real step = w[k] * f.invMass[node[k]] * dl;
-          f.pos[node[k]] += step * c.normal;
-          travel_[node[k]] += std::abs(step);
-          movedNow_[node[k]] = 1;
-        }
+      move(node, w, 4, dl, c.normal);
       ++rep.pushed;
       moved = true;
       rep.overlapLeft = std::max(rep.overlapLeft, -C);
@@ -96,14 +100,7 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
       if (!(K > 0)) continue;  // kinematic CP and body
       const Real dl = share(node, w, 2, -C / K);
       if (dl == 0) continue;
-      for (int k = 0; k < 2; ++k)
-        if (w[k] != 0 && f.invMass[node[k]] > 0) {
-          touch(node[k]);
-          const Real step = w[k] * f.invMass[node[k]] * dl;
-          f.pos[node[k]] += step * c.normal;
-          travel_[node[k]] += std::abs(step);
-          movedNow_[node[k]] = 1;
-        }
+      move(node, w, 2, dl, c.normal);
       if (b.dynamic()) {
         bodyMovedNow = true;
         b.pos += (b.invMass() * dl) * c.normal;

@@ -76,7 +76,11 @@ def is_complete(run):
 
 def command(run, script=None, yade='yade'):
     """The command line of one run (a list for subprocess)."""
+    # The checkout's scripts/ballistic.py (the package may be installed elsewhere: pass `script`).
     script = script or os.path.join(ROOT, 'scripts', 'ballistic.py')
+    if not os.path.exists(script):
+        raise ValueError('script = %r is invalid: allowed the path of scripts/ballistic.py (the installed package does '
+                         'not know the checkout: pass script=)' % script)
     args = ['%s=%r' % (k, v) if isinstance(v, float) else '%s=%s' % (k, v) for k, v in sorted(run['keys'].items())]
     return [yade, '-n', '-x', script] + args + ['out=%s' % run['out']]
 

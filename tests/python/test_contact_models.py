@@ -86,3 +86,36 @@ def test_bad_model_values_name_the_key(key, value, allowed):
         woven.contact.enable(e, **{key: value})
     assert key in str(err.value) and allowed in str(err.value)
     assert not e.collisions_enabled
+
+
+def test_gap_model_keys_name_their_range_and_bad_combinations_are_refused():
+    """The contact model's keys are validated before anything changes: the engine keeps running
+    without collisions after each refusal."""
+    e = pair()
+    e.disable_collisions()
+    for kw, key in (({'contact_model': 'sat'}, 'contact_model'),
+                    ({'projection_sweeps': 51}, 'projection_sweeps'),
+                    ({'projection_slop': -1e-6}, 'projection_slop'),
+                    ({'projection_max_move': 0.0}, 'projection_max_move'),
+                    # the projection belongs to the gap model's impulse response
+                    ({'contact_model': 'paper', 'projection_sweeps': 2}, 'projection_sweeps'),
+                    ({'response': 'penalty', 'projection_sweeps': 2}, 'projection_sweeps')):
+        with pytest.raises(Exception) as ex:
+            woven.contact.enable(e, **kw)
+        assert key in str(ex.value) and ('allowed' in str(ex.value) or 'range' in str(ex.value)), str(ex.value)
+        assert not e.collisions_enabled
+    woven.contact.enable(e, contact_model='paper', projection_sweeps=0)  # a valid combination
+    assert e.collisions_enabled
+
+
+def test_gap_model_stops_a_head_on_pair_in_touch_and_books_the_projection():
+    """Head-on at 10 m/s with sections that cannot flatten: the rows stop the pair within the gap,
+    the books close, and whatever the projection moved is in its own book."""
+    e = pair(v=10.0, flattening='none')
+    dt = 1e-8
+    for _ in range(100):
+        e.step(dt)
+    s, E = e.collision_stats(), e.energy()
+    assert s['max_penetration'] < 0.01 * woven.YarnSection().thickness
+    assert abs(E['balance_error']) < 1e-6 * 0.5 * woven.masses(e).sum() * 25
+    assert 'projection' in E and s['projection_energy'] == pytest.approx(-E['projection'], abs=1e-18)
