@@ -234,7 +234,16 @@ Real sphereGapAt(const Vec3& x0, const Vec3& x1, const Vec3& c, Real R, const Bo
   s = std::clamp((c - x0).dot(axis) / axis.squaredNorm(), Real(0), Real(1));
   const Vec3 A = x0 + s * axis, q = c - A;
   Real qx, qy;
-  const bool outside = closestOnEllipse(h.secA, h.secB, q.dot(h.secU), q.dot(h.secD), qx, qy);
+  const Real px = q.dot(h.secU), py = q.dot(h.secD);
+  const bool outside = closestOnEllipse(h.secA, h.secB, px, py, qx, qy);
+  const Real along = q.dot(axis) / axis.norm();
+  if (!outside && std::abs(along) > kTinyDistance) {
+    // Beyond an end, within the section's outline: the closest point is on the end face (a broken
+    // end's, or the next CP's that carries its own contact), straight along the axis.
+    P = A + px * h.secU + py * h.secD;
+    n = (c - P).normalized();
+    return std::abs(along) - R;
+  }
   P = A + qx * h.secU + qy * h.secD;
   const Vec3 diff = c - P;
   const Real len = diff.norm();

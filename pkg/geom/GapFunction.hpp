@@ -16,7 +16,9 @@
 //          the same g and gradient with that s: a line contact as a two-point manifold.
 //   Sphere a CP and a sphere part of centre c, radius R: g = |c - P| - R, P the closest point to c
 //          of the CP's elliptic section at s* (c's place along the axis); n = (c - P)/|c - P| is the
-//          ellipse's surface normal at P. dg/dx_k = -w_k n, dg/dc = n (body rows: v + w x (c - x_G)).
+//          ellipse's surface normal at P; beyond an end of the CP, within the section's outline, P
+//          is on the flat end face. dg/dx_k = -w_k n, dg/dc = n (body rows: v + w x (c - x_G));
+//          on an end face the turn of the axis is left out of the row.
 //   Box    a CP and a box part, n the separating-axis normal of the two boxes (held for the step):
 //          one contact per end section k: g_k = min over the box of y.n - (x_k.n + support_k(n)),
 //          the box's lowest point along n minus the section's deepest point; n the box face normal
