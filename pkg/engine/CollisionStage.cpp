@@ -3,6 +3,7 @@
 #include "core/Errors.hpp"
 #include "core/Parallel.hpp"
 #include "geom/GapFunction.hpp"
+#include "geom/SegmentDistance.hpp"
 #include "geom/SeparatingAxis.hpp"
 #include "law/SectionFlattening.hpp"
 #include <algorithm>
@@ -191,6 +192,11 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
   const bool caching = params_.cacheDistance > 0 && params_.flattening != Flattening::Springs &&
                        params_.model == ContactModel::Paper;
   const bool gapModel = params_.model == ContactModel::Gap;
+  if (gapModel) {  // each node's major semi-axis [m]
+    widest_.resize(f.secRadius.size());
+    parallelFor(f.nNodes(), kParallelGrain, threads(),
+                [&](Index k) { widest_[k] = semiAxes(f.secRadius[k], f.secFlat[k], params_.rule).a; });
+  }
   // Pairs the position projection may move together (each node at most kProjectionTravel x
   // projectionMaxMove) are listed too.
   const Real projectionReach =
@@ -223,14 +229,18 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
       if (gapModel) {
         // The pair's gap functions; listed when they can close within the step (speculative
         // contacts: the row lets each close exactly its gap), bounded by the node speeds.
-        bool side = sideBySide(f, pr.a, pr.b, pc.memo && pc.side);
-        CPContact two[2];
-        const int m = pairGaps(f, pr.a, pr.b, side, params_.rule, pc.memo ? &pc.memoNormal : nullptr, two);
-        pc.memo = true, pc.side = side, pc.memoNormal = two[0].normal;
         const Index i = f.elem0[pr.a], j = f.elem0[pr.b];
         const Real reach = params_.margin + 2 * projectionReach +
                            dt * (std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm())) +
                                  std::sqrt(std::max(f.vel[j].squaredNorm(), f.vel[j + 1].squaredNorm())));
+        // No section reaches beyond its major semi-axis: pairs whose axes are farther apart than
+        // that cannot be listed (most pairs of a broad phase with a skin), and need no sections.
+        const Real widest = std::max(std::max(widest_[i], widest_[i + 1]), std::max(widest_[j], widest_[j + 1]));
+        if (closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]).distance > 2 * widest + reach) continue;
+        bool side = sideBySide(f, pr.a, pr.b, pc.memo && pc.side);
+        CPContact two[2];
+        const int m = pairGaps(f, pr.a, pr.b, side, params_.rule, pc.memo ? &pc.memoNormal : nullptr, two, &tangent_);
+        pc.memo = true, pc.side = side, pc.memoNormal = two[0].normal;
         for (int q = 0; q < m; ++q)
           if (two[q].gap <= reach) out.push_back(two[q]);
         continue;
@@ -263,7 +273,7 @@ void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
   BodyContact c[2];
   const bool gapModel = params_.model == ContactModel::Gap;
   for (const BodyCandidate& pc : bodyPairs_) {
-    const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin, params_.rule, c)
+    const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin, params_.rule, c, &tangent_)
                            : cpBodyContact(f, bounds_[pc.cp], pc.cp, bodies[pc.body], pc.part, dt, params_.margin,
                                            params_.rule, c[0]);
     for (int q = 0; q < m; ++q) {
@@ -338,7 +348,7 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
     parallelFor(nc, 256, threads(), [&](Index k) {  // each contact on its own
       CPContact& c = contacts_[k];
       if (c.time > 0 || !(dirty_[c.cpA] || dirty_[c.cpB])) return;
-      if (c.kind != ContactKind::Paper) return remeasure(f, c, params_.rule, true);  // same points, new sections
+      if (c.kind != ContactKind::Paper) return remeasure(f, c, params_.rule, true, &tangent_);  // same points, new sections
       CPContact again;
       if (cpContactStatic(f, bounds_, c.cpA, c.cpB, params_.margin, params_.rule, again)) c = again;
       else c.gap = 2 * params_.margin;  // apart now: at least this far

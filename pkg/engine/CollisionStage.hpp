@@ -159,7 +159,7 @@ class CollisionStage : public StepHook {
   Vec3Array tangent_, dirSum_;
   std::vector<OBB> bounds_, grown_, skinBoxes_;  // skinBoxes_: grown_ + skin at the last broad phase
   bool pairsValid_ = false;
-  std::vector<Real> grow_, flatBefore_;
+  std::vector<Real> grow_, flatBefore_, widest_;  // widest_: per node, the major semi-axis (model Gap)
   std::vector<CPPair> pairs_;
   std::vector<CPContact> contacts_;
   std::vector<BodyCandidate> bodyPairs_;

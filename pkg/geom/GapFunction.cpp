@@ -39,8 +39,9 @@ void orientNormal(const Vec3& d, const Vec3* orient, bool interior, const Vec3& 
 
 // The yarn's tangent at s along CP e: its node tangents interpolated. At a crossing node of a
 // crimped yarn it is level where the chord is tilted by the crimp angle.
-Vec3 yarnTangent(const Fabric& f, Index e, Real s) {
+Vec3 yarnTangent(const Fabric& f, Index e, Real s, const Vec3Array* tangent) {
   const Index i = f.elem0[e];
+  if (tangent) return ((1 - s) * (*tangent)[i] + s * (*tangent)[i + 1]).normalized();
   return ((1 - s) * yarnTangentAt(f, i) + s * yarnTangentAt(f, i + 1)).normalized();
 }
 
@@ -76,9 +77,9 @@ Real thicknessWeight(const Vec3& tA, const Vec3& tB) {
 }
 
 // The section of CP e at s in the yarn's own plane (normal to yarnTangent), for the supports.
-SectionAt yarnSection(const Fabric& f, Index e, Real s, SectionRule rule) {
+SectionAt yarnSection(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3Array* tangent) {
   SectionAt q = sectionAt(f, e, s, rule);
-  const Vec3 t = yarnTangent(f, e, s);
+  const Vec3 t = yarnTangent(f, e, s, tangent);
   Vec3 d = q.d - q.d.dot(t) * t;
   q.t = t;
   q.d = d.norm() > 1e-9 ? Vec3(d.normalized()) : t.unitOrthogonal();
@@ -88,7 +89,7 @@ SectionAt yarnSection(const Fabric& f, Index e, Real s, SectionRule rule) {
 
 // One CP-CP contact from the axis points A(s), B(t) with the sections' supports along the normal.
 void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kind, SectionRule rule, const Vec3* orient,
-              bool sections, CPContact& c) {
+              bool sections, const Vec3Array* tangent, CPContact& c) {
   const Index i = f.elem0[a], j = f.elem0[b];
   const Vec3 pA = (1 - s) * f.pos[i] + s * f.pos[i + 1], pB = (1 - t) * f.pos[j] + t * f.pos[j + 1];
   const Vec3 tA = f.pos[i + 1] - f.pos[i], tB = f.pos[j + 1] - f.pos[j];
@@ -97,7 +98,7 @@ void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kin
   Real r;
   orientNormal(pB - pA, orient, s > 0 && s < 1 && t > 0 && t < 1, tA, tB, centres, n, r);
   if (sections) {
-    const SectionAt qa = yarnSection(f, a, s, rule), qb = yarnSection(f, b, t, rule);
+    const SectionAt qa = yarnSection(f, a, s, rule, tangent), qb = yarnSection(f, b, t, rule, tangent);
     c.hDir = supportDirection(n, qa.t, qb.t, kind == ContactKind::Side);
     // Half-thicknesses where the pieces cross at more than 45 degrees, supports along hDir (widths
     // where the ribbons meet edge to edge) below 20, blended between: g must not jump where a pair
@@ -141,7 +142,8 @@ bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide) {
   return std::abs(tA.dot(tB)) >= (wasSide ? cosLeave : cosEnter);
 }
 
-int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, const Vec3* orient, CPContact out[2]) {
+int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, const Vec3* orient, CPContact out[2],
+             const Vec3Array* tangent) {
   const Index i = f.elem0[a], j = f.elem0[b];
   if (side) {
     // The part of A alongside B: B's ends projected on A's axis, clipped to A.
@@ -157,7 +159,7 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
       for (int k = 0; k < n; ++k) {
         const Real s = at[k];
         fillPair(f, a, b, s, alongCP(f, b, (1 - s) * f.pos[i] + s * f.pos[i + 1]), ContactKind::Side, rule,
-                 orient, true, out[k]);
+                 orient, true, tangent, out[k]);
       }
       return n;
     }
@@ -166,11 +168,11 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
   // to end) keep the side-by-side measure at their closest points, so that the gap does not jump
   // from the half-thickness to the width when they slide alongside.
   const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
-  fillPair(f, a, b, sc.s, sc.t, side ? ContactKind::Side : ContactKind::Cross, rule, orient, true, out[0]);
+  fillPair(f, a, b, sc.s, sc.t, side ? ContactKind::Side : ContactKind::Cross, rule, orient, true, tangent, out[0]);
   return 1;
 }
 
-void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections) {
+void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections, const Vec3Array* tangent) {
   const Index i = f.elem0[c.cpA], j = f.elem0[c.cpB];
   Real s = c.sA, t;
   if (c.kind == ContactKind::Side) {
@@ -180,7 +182,7 @@ void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections) {
     s = sc.s, t = sc.t;
   }
   const Vec3 orient = c.normal;
-  fillPair(f, c.cpA, c.cpB, s, t, c.kind, rule, &orient, sections, c);
+  fillPair(f, c.cpA, c.cpB, s, t, c.kind, rule, &orient, sections, tangent, c);
 }
 
 bool closestOnEllipse(Real a, Real b, Real px, Real py, Real& qx, Real& qy) {
@@ -273,7 +275,7 @@ void nodeFrame(const Fabric& f, Index k, const Vec3& t, SectionRule rule, Vec3& 
 }  // namespace
 
 int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
-            BodyContact out[2]) {
+            BodyContact out[2], const Vec3Array* tangent) {
   const Index i = f.elem0[cp];
   // Listed when it can touch within the step: a speculative contact (Box2D), whose row lets the pair
   // close exactly its gap.
@@ -297,7 +299,8 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
   const OBB box = body.partBox(part);
   Vec3 u[2], d[2];
   SemiAxes ax[2];
-  for (int k = 0; k < 2; ++k) nodeFrame(f, i + k, yarnTangentAt(f, i + k), rule, u[k], d[k], ax[k]);
+  for (int k = 0; k < 2; ++k)
+    nodeFrame(f, i + k, tangent ? (*tangent)[i + k] : yarnTangentAt(f, i + k), rule, u[k], d[k], ax[k]);
   Real best = -INFINITY;
   for (int j = 0; j < 6; ++j) {
     const Vec3 n = (j < 3 ? 1.0 : -1.0) * box.axes.col(j % 3);

@@ -56,20 +56,22 @@ bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide);
 
 /// The contacts of the pair a < b as the kind says (1 for Cross, 1 or 2 for Side), in out[]: normal,
 /// gap (sections measured now), sA/sB, point, kind, hA/hB. `orient` (may be null) is the pair's
-/// remembered normal. Returns the count.
-int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, const Vec3* orient, CPContact out[2]);
+/// remembered normal. `tangent` (may be null: computed) holds every node's yarn tangent
+/// (bound/CPBound's yarnTangentAt, as the stage's refit leaves them). Returns the count.
+int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, const Vec3* orient, CPContact out[2],
+             const Vec3Array* tangent = nullptr);
 
 /// Measures contact c again at the current positions: closest points (Cross) or closest point of
 /// B to the fixed A(sA) (Side), normal kept on c's side, and the gap with c's section supports
 /// hA, hB (held) or, with `sections`, supports measured again (after flattening). This is g(x).
-void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections);
+void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections, const Vec3Array* tangent = nullptr);
 
 /// CP-body contacts of the gap model in out[] (the sphere form: 1; the box form: one per end section
 /// that can touch), each listed when g <= margin + the approach within dt (relative normal velocity
 /// of the two points: a speculative contact, whose row lets the pair close exactly its gap).
 /// Returns the count.
 int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
-            BodyContact out[2]);
+            BodyContact out[2], const Vec3Array* tangent = nullptr);
 
 /// Measures body contact c again at the current positions and pose (its normal held for a box, its
 /// section frame held for a sphere): g(x, body pose). Sets gap, point, s and normal (sphere).
