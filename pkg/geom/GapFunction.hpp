@@ -9,8 +9,11 @@
 // flattening passes change between measurements) is held fixed: it is a parameter of g, not a
 // function of the positions. The kinds:
 //   Cross  crossing CPs: g = |B(t*) - A(s*)| - h_A - h_B, (s*, t*) the closest points of the two
-//          axis segments, n the unit vector between them and h_X the support of X's section at the
-//          point along n. By the envelope theorem dg/dx_k = w_k n with w = -(1-s*), -s*, 1-t*, t*.
+//          axis segments, n the unit vector between them and h_X X's section measure at the point:
+//          its half-thickness b where the yarns cross at 45 degrees or more (and within one yarn:
+//          a fold lies face to face), its support along the normal (made normal to the yarn) below
+//          20 degrees, blended between (docs/collisions.md says why). By the envelope theorem
+//          dg/dx_k = w_k n with w = -(1-s*), -s*, 1-t*, t*.
 //   Side   side-by-side (near-parallel) CPs, two points: s fixed at the ends of the part of A that
 //          lies alongside B (a material point of A), t* the closest point of B's axis to A(s);
 //          the same g and gradient with that s: a line contact as a two-point manifold.
