@@ -262,44 +262,11 @@ def bracket(rows):
     return {'mixed_zone': [min(through), max(stopped)]}
 
 
-def fit_lambert_jonas_fast(V, vr, p_range=(1.0, 4.0)):
-    """woven.theory.fit_lambert_jonas's grid search (the same grids, refinement and bounds on a),
-    with the grid of V_bl done as one array operation per exponent: about 30x faster, for the
-    bootstrap's hundreds of refits. Sums are taken in another order, so a near tie may pick a
-    neighbouring grid point (tested to agree within one grid step). Returns V_bl, a, p, rms."""
-    import numpy as np
-    V = np.asarray(V, dtype=float)
-    vr = np.asarray(vr, dtype=float)
-    if len(V) < 3 or len(V) != len(vr):
-        raise ValueError('runs = %d is invalid: allowed at least 3 (V, residual velocity) pairs' % len(V))
-    if not np.any(vr > 0):
-        raise ValueError('residual velocities are all 0: no run perforated, the V50 lies above %.1f m/s' % V.max())
-
-    def best(vbl_grid, p_grid):
-        out = None
-        for p in p_grid:
-            d = V[None, :] ** p - vbl_grid[:, None] ** p
-            g = np.where(V[None, :] > vbl_grid[:, None], np.maximum(d, 0.0) ** (1.0 / p), 0.0)
-            gg = np.einsum('ij,ij->i', g, g)
-            a = np.clip(np.divide(g @ vr, gg, out=np.zeros_like(gg), where=gg > 0), 0.0, 1.0)
-            sse = np.sum((a[:, None] * g - vr[None, :]) ** 2, axis=1)
-            k = int(np.argmin(sse))
-            if out is None or sse[k] < out[0]:
-                out = (float(sse[k]), float(vbl_grid[k]), float(a[k]), float(p))
-        return out
-    top = V.max()
-    sse, vbl, a, p = best(np.linspace(0, top, 401)[:-1], np.linspace(p_range[0], p_range[1], 31))
-    step_v, step_p = top / 400, (p_range[1] - p_range[0]) / 30
-    sse, vbl, a, p = best(np.linspace(max(0, vbl - step_v), min(top, vbl + step_v), 81),
-                          np.linspace(max(p_range[0], p - step_p), min(p_range[1], p + step_p), 21))
-    return {'V_bl': vbl, 'a': a, 'p': p, 'rms': math.sqrt(sse / len(V))}
-
-
 def v50(rows, boot=200, boot_seed=1, level=0.95):
     """Lambert-Jonas fit of (V, residual velocity) of the rows (woven.theory.fit_lambert_jonas, as
     scripts/v50.py) and a bootstrap confidence interval of V50 = V_bl: the runs are resampled with
     replacement `boot` times (numpy's default_rng(boot_seed): the same interval every time), each
-    sample refitted (fit_lambert_jonas_fast); the interval is the (1 -/+ level)/2 percentiles of those V_bl. Samples without a
+    sample refitted; the interval is the (1 -/+ level)/2 percentiles of those V_bl. Samples without a
     perforation have no fit and are counted, not used. Raises ValueError as the fit does."""
     import numpy as np
     from .theory import fit_lambert_jonas
@@ -313,7 +280,7 @@ def v50(rows, boot=200, boot_seed=1, level=0.95):
         for _ in range(boot):
             i = rng.integers(0, len(V), len(V))
             try:
-                vals.append(fit_lambert_jonas_fast(V[i], vr[i])['V_bl'])
+                vals.append(fit_lambert_jonas(V[i], vr[i])['V_bl'])
             except ValueError:
                 failed += 1
         if vals:

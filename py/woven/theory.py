@@ -103,16 +103,17 @@ def fit_lambert_jonas(V, vr, p_range=(1.0, 4.0)):
     if not np.any(vr > 0):
         raise ValueError('residual velocities are all 0: no run perforated, the V50 lies above %.1f m/s' % V.max())
 
-    def best(vbl_grid, p_grid):
+    def best(vbl_grid, p_grid):  # the V_bl grid as one array operation per exponent (the bootstrap refits)
         out = None
         for p in p_grid:
-            for vbl in vbl_grid:
-                g = np.where(V > vbl, np.maximum(V ** p - vbl ** p, 0.0) ** (1.0 / p), 0.0)
-                gg = float(g @ g)
-                a = min(max(float(g @ vr) / gg, 0.0), 1.0) if gg > 0 else 0.0  # 0 < a <= 1: v_r <= V
-                sse = float(np.sum((a * g - vr) ** 2))
-                if out is None or sse < out[0]:
-                    out = (sse, vbl, a, p)
+            d = V[None, :] ** p - vbl_grid[:, None] ** p
+            g = np.where(V[None, :] > vbl_grid[:, None], np.maximum(d, 0.0) ** (1.0 / p), 0.0)
+            gg = np.einsum('ij,ij->i', g, g)
+            a = np.clip(np.divide(g @ vr, gg, out=np.zeros_like(gg), where=gg > 0), 0.0, 1.0)
+            sse = np.sum((a[:, None] * g - vr[None, :]) ** 2, axis=1)
+            k = int(np.argmin(sse))
+            if out is None or sse[k] < out[0]:
+                out = (float(sse[k]), float(vbl_grid[k]), float(a[k]), float(p))
         return out
     top = V.max()
     sse, vbl, a, p = best(np.linspace(0, top, 401)[:-1], np.linspace(p_range[0], p_range[1], 31))
