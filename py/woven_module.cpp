@@ -329,11 +329,11 @@ bp::object candidatePairsPy(FabricEngine& e, const std::string& broad) {
   for (const CPPair& q : pairs) flat.push_back(q.a), flat.push_back(q.b);
   return bytesOf(flat);
 }
-bp::object contactsPy(FabricEngine& e) {  // cpA, cpB, gap [m], normal x y z, sA, sB, kind per contact of the last step
+bp::object contactsPy(FabricEngine& e) {  // cpA, cpB, gap [m], normal x y z, sA, sB, kind, hA, hB [m] per contact of the last step
   std::vector<Real> out;
   for (const CPContact& c : stageOf(e).contacts())
     out.insert(out.end(), {Real(c.cpA), Real(c.cpB), c.gap, c.normal.x(), c.normal.y(), c.normal.z(), c.sA, c.sB,
-                           Real(static_cast<int>(c.kind))});
+                           Real(static_cast<int>(c.kind)), c.hA, c.hB});
   return bytesOf(out);
 }
 bp::object semiAxesPy(FabricEngine& e) {  // a, b per node [m] with the stage's section rule

@@ -225,7 +225,10 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
       // The bounds lie inside the boxes grown by the step's motion: where those do not meet, the
       // pair neither touches nor meets within the step (a yes/no SAT with early out, cheaper than
       // the static test's depth and far cheaper than the moving test's four sweeps).
-      if (!obbOverlap(grown_[pr.a], grown_[pr.b])) continue;
+      if (!obbOverlap(grown_[pr.a], grown_[pr.b])) {
+        pc.memoPoints = 0;  // the sections may turn unseen while apart: their measure is forgotten
+        continue;
+      }
       if (gapModel) {
         // The pair's gap functions; listed when they can close within the step (speculative
         // contacts: the row lets each close exactly its gap), bounded by the node speeds.
@@ -236,11 +239,33 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         // No section reaches beyond its major semi-axis: pairs whose axes are farther apart than
         // that cannot be listed (most pairs of a broad phase with a skin), and need no sections.
         const Real widest = std::max(std::max(widest_[i], widest_[i + 1]), std::max(widest_[j], widest_[j + 1]));
-        if (closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]).distance > 2 * widest + reach) continue;
+        if (closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]).distance > 2 * widest + reach) {
+          pc.memoPoints = 0;
+          continue;
+        }
         bool side = sideBySide(f, pr.a, pr.b, pc.memo && pc.side);
         CPContact two[2];
-        const int m = pairGaps(f, pr.a, pr.b, side, params_.rule, pc.memo ? &pc.memoNormal : nullptr, two, &tangent_);
-        pc.memo = true, pc.side = side, pc.memoNormal = two[0].normal;
+        // The pair's memory (GapFunction.hpp): its normals by point (a side-by-side pair's two
+        // points are the ends of the shared part; one point that becomes two starts both from it,
+        // two that become one from the first), its sections' measure at the nearest remembered
+        // point along A. A pair without a remembered measure (new to the broad phase, or its boxes
+        // parted since) may claim no more than its half-thicknesses where that overlaps: its
+        // sections are taken as turned the way that fits, as a remembered pair's would have turned.
+        const Vec3 orient[2] = {pc.memoNormal[0], pc.memoNormal[pc.memoPoints == 2 ? 1 : 0]};
+        const int m = pairGaps(f, pr.a, pr.b, side, params_.rule, pc.memo ? orient : nullptr, two, &tangent_);
+        for (int q = 0; q < m; ++q) {
+          Real remembered;
+          if (pc.memoPoints == 0) {
+            remembered = sectionAt(f, pr.a, two[q].sA, params_.rule).b + sectionAt(f, pr.b, two[q].sB, params_.rule).b;
+          } else {
+            const int near = pc.memoPoints == 2 && std::abs(pc.memoS[1] - two[q].sA) < std::abs(pc.memoS[0] - two[q].sA);
+            remembered = pc.memoMeasure[near];
+          }
+          capMeasure(two[q], remembered);
+        }
+        pc.memo = true, pc.side = side, pc.memoPoints = m;
+        for (int q = 0; q < m; ++q)
+          pc.memoS[q] = two[q].sA, pc.memoNormal[q] = two[q].normal, pc.memoMeasure[q] = two[q].hA + two[q].hB;
         for (int q = 0; q < m; ++q)
           if (two[q].gap <= reach) out.push_back(two[q]);
         continue;

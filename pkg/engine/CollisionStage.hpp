@@ -136,9 +136,15 @@ class CollisionStage : public StepHook {
   void narrow(const Fabric& f, Real dt);
   struct PairCache {
     // The pair's memory (model Gap; kept while the broad phase keeps the pair, forgotten with the
-    // cache): its kind (Side / Cross hysteresis) and the side its normal points to.
+    // cache): its kind (Side / Cross hysteresis), the side its normal points to, and the measure
+    // its sections claimed (GapFunction.hpp, capMeasure).
     bool memo = false, side = false;
-    Vec3 memoNormal = Vec3::Zero();
+    // Its contact points at the last narrow phase that measured it (1 or 2; 0: measure forgotten,
+    // the pair was not measured since its boxes parted): A's place sA, the normal and the sections'
+    // measure hA + hB [m] at each.
+    int memoPoints = 0;
+    Real memoS[2] = {0, 0}, memoMeasure[2] = {0, 0};
+    Vec3 memoNormal[2] = {Vec3::Zero(), Vec3::Zero()};
     bool valid = false;
     long clock = 0;     // narrow phase that measured it
     CPContact contact;

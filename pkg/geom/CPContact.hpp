@@ -1,6 +1,7 @@
 // Geometry functor: the contact between two CPs from their OBBs (the bound functor's boxes, which
 // carry the margin), static at the start of the step or, failing that, moving over the step.
 #pragma once
+#include <limits>
 #include "bound/OBB.hpp"
 #include "fabric/Fabric.hpp"
 #include "shape/Section.hpp"
@@ -42,6 +43,9 @@ struct CPContact {
   Real time = 0;                 ///< first time of contact within the step [s] (0: touching at the start)
   ContactKind kind = ContactKind::Paper;
   Real hA = 0, hB = 0;           ///< gap model: the sections' supports at the point, held for the step [m]
+  /// Gap model: the largest hA + hB the pair's sections may claim (GapFunction.hpp, "measure
+  /// memory"); +inf for a pair measured for the first time [m].
+  Real hCap = std::numeric_limits<Real>::infinity();
   Vec3 hDir = Vec3::UnitZ();     ///< gap model: the direction they are measured (and flattened) along (GapFunction.hpp)
 };
 

@@ -10,6 +10,9 @@ namespace {
 constexpr Real kPi = 3.14159265358979323846;
 // Below this the vector between two axis points gives no direction [m] (1e-5 of a KM2 filament).
 constexpr Real kTinyDistance = 1e-15;
+// Deviation of the yarn's tangent from a CP's chord up to which the tangent is used, and beyond
+// which the chord is (yarnTangent) [deg].
+constexpr Real kKinkYarnDeg = 15, kKinkFullDeg = 30;
 
 inline Real support(const SectionAt& q, const Vec3& n) { return ellipseSupport(q.u, q.d, q.a, q.b, n); }
 
@@ -38,11 +41,30 @@ void orientNormal(const Vec3& d, const Vec3* orient, bool interior, const Vec3& 
 }
 
 // The yarn's tangent at s along CP e: its node tangents interpolated. At a crossing node of a
-// crimped yarn it is level where the chord is tilted by the crimp angle.
+// crimped yarn it is level where the chord is tilted by the crimp angle (8 degrees in KM2 706 at one
+// CP per span). Where the chain is kinked (a broken end whipping, a yarn wrapped round a projectile's
+// edge) the node tangents, central differences over three chords, turn far from the chord and
+// faster than it: a section measured across them read a 76-degree crossing as side by side and its
+// width as the contact's measure, and the gap fell by hundreds of micrometres in a few steps while
+// the axes moved apart (the projection then pushed on phantom overlaps and put energy in). So the
+// chord's own direction is taken where the interpolated tangent leaves it by more than
+// kKinkFullDeg, blended from kKinkYarnDeg: the yarn's tangent where the chain is smooth, the CP's
+// straight axis where it is not.
 Vec3 yarnTangent(const Fabric& f, Index e, Real s, const Vec3Array* tangent) {
   const Index i = f.elem0[e];
-  if (tangent) return ((1 - s) * (*tangent)[i] + s * (*tangent)[i + 1]).normalized();
-  return ((1 - s) * yarnTangentAt(f, i) + s * yarnTangentAt(f, i + 1)).normalized();
+  const Vec3 chord = (f.pos[i + 1] - f.pos[i]).normalized();
+  Vec3 t = tangent ? Vec3((1 - s) * (*tangent)[i] + s * (*tangent)[i + 1])
+                   : Vec3((1 - s) * yarnTangentAt(f, i) + s * yarnTangentAt(f, i + 1));
+  const Real len = t.norm();
+  if (!(len > 1e-9)) return chord;
+  t /= len;
+  if (t.dot(chord) < 0) t = -t;
+  static const Real cYarn = std::cos(kKinkYarnDeg * kPi / 180), cFull = std::cos(kKinkFullDeg * kPi / 180);
+  const Real c = t.dot(chord);
+  if (c >= cYarn) return t;
+  if (c <= cFull) return chord;
+  const Real mu = (c - cFull) / (cYarn - cFull);  // 1 at kKinkYarnDeg, 0 at kKinkFullDeg
+  return (mu * t + (1 - mu) * chord).normalized();
 }
 
 // Direction the sections' supports are measured along. The chords' common normal n leans by the
@@ -107,6 +129,8 @@ void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kin
     const Real lambda = f.elemYarn[a] == f.elemYarn[b] ? 1.0 : thicknessWeight(qa.t, qb.t);
     c.hA = lambda * qa.b + (1 - lambda) * support(qa, c.hDir);
     c.hB = lambda * qb.b + (1 - lambda) * support(qb, c.hDir);
+    const Real H = c.hA + c.hB;
+    if (H > c.hCap) c.hA *= c.hCap / H, c.hB *= c.hCap / H;  // the measure memory (capMeasure)
   }
   c.cpA = a, c.cpB = b, c.kind = kind;
   c.sA = s, c.sB = t;
@@ -159,7 +183,7 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
       for (int k = 0; k < n; ++k) {
         const Real s = at[k];
         fillPair(f, a, b, s, alongCP(f, b, (1 - s) * f.pos[i] + s * f.pos[i + 1]), ContactKind::Side, rule,
-                 orient, true, tangent, out[k]);
+                 orient ? orient + k : nullptr, true, tangent, out[k]);
       }
       return n;
     }
@@ -183,6 +207,17 @@ void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections, c
   }
   const Vec3 orient = c.normal;
   fillPair(f, c.cpA, c.cpB, s, t, c.kind, rule, &orient, sections, tangent, c);
+}
+
+void capMeasure(CPContact& c, Real remembered) {
+  const Real r = c.gap + c.hA + c.hB;  // the axes' signed distance
+  c.hCap = std::max(remembered, r);
+  const Real H = c.hA + c.hB;
+  if (!(H > c.hCap)) return;
+  const Vec3 pA = c.point - (c.hA + 0.5 * c.gap) * c.normal;  // A's axis point
+  c.hA *= c.hCap / H, c.hB *= c.hCap / H;
+  c.gap = r - c.hCap;
+  c.point = pA + (c.hA + 0.5 * c.gap) * c.normal;  // half way between the two surfaces, as fillPair
 }
 
 bool closestOnEllipse(Real a, Real b, Real px, Real py, Real& qx, Real& qy) {

@@ -58,11 +58,23 @@ SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule);
 bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide);
 
 /// The contacts of the pair a < b as the kind says (1 for Cross, 1 or 2 for Side), in out[]: normal,
-/// gap (sections measured now), sA/sB, point, kind, hA/hB. `orient` (may be null) is the pair's
-/// remembered normal. `tangent` (may be null: computed) holds every node's yarn tangent
+/// gap (sections measured now), sA/sB, point, kind, hA/hB. `orient` (may be null) points to the
+/// pair's two remembered normals, one per point (a side-by-side pair's points lie at the two ends
+/// of the shared part, where skew axes can have opposite normals; one point reads orient[0]). `tangent` (may be null: computed) holds every node's yarn tangent
 /// (bound/CPBound's yarnTangentAt, as the stage's refit leaves them). Returns the count.
 int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, const Vec3* orient, CPContact out[2],
              const Vec3Array* tangent = nullptr);
+
+/// The measure memory: the sections' measure hA + hB of a CP pair may grow between steps only into
+/// room that is there (up to the axes' distance r), never into an overlap: it is capped at
+/// max(`remembered`, r), `remembered` the pair's measure at its last narrow phase, and the cap is
+/// kept in c.hCap for later measurements of the step (after flattening). The measure is a state
+/// of the sections (their turn, flattening and the crossing angle), which the model does not move
+/// by forces: when the yarns kink (a broken end whipping) it turned a section's width onto its
+/// neighbour by 200 um in one step while the axes moved apart, and the projection then pushed
+/// the pair apart with energy no force had given. A section that would turn into its neighbour is
+/// held by it (the rows and the projection still act on g = r - hA - hB, with the capped measure).
+void capMeasure(CPContact& c, Real remembered);
 
 /// Measures contact c again at the current positions: closest points (Cross) or closest point of
 /// B to the fixed A(sA) (Side), normal kept on c's side, and the gap with c's section supports

@@ -44,8 +44,10 @@ def section_semi_axes(engine):
 
 def contacts(engine):
     """Contacts of the last step: columns cpA, cpB, gap [m] (< 0: overlap), normal x, y, z, sA, sB (the
-    contact point along each CP), kind (0 paper, 1 crossing, 2 side by side); shape (n, 9)."""
-    return np.frombuffer(engine._contacts(), dtype=np.float64).reshape(-1, 9)
+    contact point along each CP), kind (0 paper, 1 crossing, 2 side by side), hA, hB [m] (each section's
+    measure along the normal: the gap is the axes' distance less hA + hB; 0 in the paper's model);
+    shape (n, 11)."""
+    return np.frombuffer(engine._contacts(), dtype=np.float64).reshape(-1, 11)
 
 
 def candidate_pairs(engine, broad_phase='tree'):
