@@ -211,7 +211,7 @@ bp::dict collisionStats(FabricEngine& e) {
   d["seconds_refit"] = s.seconds[0], d["seconds_broad"] = s.seconds[1];
   d["seconds_narrow"] = s.seconds[2], d["seconds_respond"] = s.seconds[3];
   d["tree_rebuilt_nodes"] = stageOf(e).tree.stats.rebuiltNodes;
-  d["body_contacts"] = s.bodyContacts, d["body_penetration"] = s.bodyPenetration;
+  d["body_contacts"] = s.bodyContacts, d["body_penetration"] = s.bodyPenetration, d["deepest_body_cp"] = s.deepestBodyCP;
   d["max_body_penetration"] = s.maxBodyPenetration, d["body_lists"] = stageOf(e).bodyCollider.rebuilds;
   return d;
 }

@@ -292,13 +292,31 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
 }
 
 void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
+  // The last step's contacts, by CP, body and part: the gap model's measure memory (bodyGap).
+  const auto key = [](Index cp, int body, int part) {
+    return (static_cast<std::uint64_t>(cp) << 32) | (static_cast<std::uint64_t>(body & 0xffff) << 16) |
+           static_cast<std::uint64_t>(part & 0xffff);
+  };
+  heldBody_.swap(bodyContacts_);
+  if (heldFor_ != bodies.size() || forgetHeld_) heldBody_.clear();  // bodies added or removed: indices moved
+  heldFor_ = bodies.size(), forgetHeld_ = false;
+  heldKeys_.clear();
+  for (std::size_t q = 0; q < heldBody_.size(); ++q)
+    heldKeys_.emplace_back(key(heldBody_[q].cp, heldBody_[q].body, heldBody_[q].part), q);
+  std::sort(heldKeys_.begin(), heldKeys_.end());
   bodyContacts_.clear();
   if (bodies.empty()) return;
   bodyCollider.collide(f, grown_, grow_, bodies, dt, bodyPairs_);
   BodyContact c[2];
   const bool gapModel = params_.model == ContactModel::Gap;
   for (const BodyCandidate& pc : bodyPairs_) {
-    const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin, params_.rule, c, &tangent_)
+    const BodyContact* held = nullptr;
+    if (gapModel) {
+      const auto it = std::lower_bound(heldKeys_.begin(), heldKeys_.end(),
+                                       std::make_pair(key(pc.cp, pc.body, pc.part), std::size_t(0)));
+      if (it != heldKeys_.end() && it->first == key(pc.cp, pc.body, pc.part)) held = &heldBody_[it->second];
+    }
+    const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin, params_.rule, c, &tangent_, held)
                            : cpBodyContact(f, bounds_[pc.cp], pc.cp, bodies[pc.body], pc.part, dt, params_.margin,
                                            params_.rule, c[0]);
     for (int q = 0; q < m; ++q) {
@@ -505,8 +523,9 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   spring_ = spring + stats.forces.halfDrift;
   stats.bodyContacts = static_cast<long>(bodyContacts_.size());
   stats.bodyPenetration = 0;
+  stats.deepestBodyCP = -1;
   for (const BodyContact& c : bodyContacts_) {
-    stats.bodyPenetration = std::max(stats.bodyPenetration, -c.gap);
+    if (-c.gap > stats.bodyPenetration) stats.bodyPenetration = -c.gap, stats.deepestBodyCP = c.cp;
     if (c.gap < 0) stats.bodyOverlapSum -= c.gap, ++stats.bodyOverlapCount;
   }
   stats.maxBodyPenetration = std::max(stats.maxBodyPenetration, stats.bodyPenetration);

@@ -48,6 +48,7 @@ struct CollisionStats {
   long overlapping = 0;       ///< contacts overlapping after flattening
   long bodyContacts = 0;      ///< CP-body contacts (static + moving)
   Real bodyPenetration = 0;   ///< largest CP-body overlap at the start of the step [m]
+  Index deepestBodyCP = -1;   ///< the CP of that contact (-1: none)
   // since the start
   long steps = 0;
   long broadPhases = 0;       ///< broad phases run (the other steps reused the pairs: Verlet skin)
@@ -103,7 +104,7 @@ class CollisionStage : public StepHook {
   /// Forgets the carried contacts (ContactParams::cacheDistance): every pair is tested at the next
   /// step. Called when a state is saved or loaded, so that a run continued from a saved state and
   /// the run that saved it go on bit for bit alike.
-  void invalidateCache() { cache_.clear(), cachePairs_.clear(); }
+  void invalidateCache() { cache_.clear(), cachePairs_.clear(), forgetHeld_ = true; }
   /// Largest overlap of body k with any CP in the fabric as it stands [m] (<= 0: clear of it); moves
   /// nothing.
   Real bodyOverlap(Fabric& f, int k);
@@ -170,6 +171,10 @@ class CollisionStage : public StepHook {
   std::vector<CPContact> contacts_;
   std::vector<BodyCandidate> bodyPairs_;
   std::vector<BodyContact> bodyContacts_;
+  std::vector<BodyContact> heldBody_;                          // the last step's, for the measure memory
+  std::vector<std::pair<std::uint64_t, std::size_t>> heldKeys_;  // (CP, body, part) -> index in heldBody_
+  std::size_t heldFor_ = 0;                                       // the body count they were measured with
+  bool forgetHeld_ = false;                                       // invalidateCache: no memory at the next step
   Real bodyWork_ = 0;
   std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per chunk of pairs
   std::vector<long> reused_;                    // carried contacts per chunk of pairs

@@ -13,6 +13,9 @@ constexpr Real kTinyDistance = 1e-15;
 // Deviation of the yarn's tangent from a CP's chord up to which the tangent is used, and beyond
 // which the chord is (yarnTangent) [deg].
 constexpr Real kKinkYarnDeg = 15, kKinkFullDeg = 30;
+// How much closer than at both ends of their shared part the axes of side-by-side pieces must come
+// inside it for the closest point to join the manifold (pairGaps) [m]: below it they lie alongside.
+constexpr Real kSideSkew = 0.5e-6;
 
 inline Real support(const SectionAt& q, const Vec3& n) { return ellipseSupport(q.u, q.d, q.a, q.b, n); }
 
@@ -179,7 +182,22 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
       // Two points at the ends of the shared part carry a line contact's force and moment; a short
       // shared part (the pieces meet end to end) is one point.
       const int n = hi - lo > 1e-3 ? 2 : 1;
-      const Real at[2] = {n == 2 ? lo : 0.5 * (lo + hi), hi};
+      Real at[2] = {n == 2 ? lo : 0.5 * (lo + hi), hi};
+      if (n == 2) {
+        // Skew pieces whose axes come closest inside the shared part (an X at a small angle): the
+        // ends do not see that approach, so the closest point takes the place of the farther end
+        // (where the axes are parallel to within kSideSkew the ends hold the line, as above).
+        const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
+        if (sc.s > lo && sc.s < hi) {
+          const auto distanceAt = [&](Real s) {
+            const Vec3 p = (1 - s) * f.pos[i] + s * f.pos[i + 1];
+            const Real t = alongCP(f, b, p);
+            return ((1 - t) * f.pos[j] + t * f.pos[j + 1] - p).norm();
+          };
+          const Real rLo = distanceAt(lo), rHi = distanceAt(hi);
+          if (sc.distance < std::min(rLo, rHi) - kSideSkew) at[rLo <= rHi ? 1 : 0] = sc.s;
+        }
+      }
       for (int k = 0; k < n; ++k) {
         const Real s = at[k];
         fillPair(f, a, b, s, alongCP(f, b, (1 - s) * f.pos[i] + s * f.pos[i + 1]), ContactKind::Side, rule,
@@ -310,7 +328,7 @@ void nodeFrame(const Fabric& f, Index k, const Vec3& t, SectionRule rule, Vec3& 
 }  // namespace
 
 int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
-            BodyContact out[2], const Vec3Array* tangent) {
+            BodyContact out[2], const Vec3Array* tangent, const BodyContact* held) {
   const Index i = f.elem0[cp];
   // Listed when it can touch within the step: a speculative contact (Box2D), whose row lets the pair
   // close exactly its gap.
@@ -325,6 +343,13 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
     const SectionAt q = sectionAt(f, cp, alongCP(f, cp, centre), rule);
     c.secU = q.u, c.secD = q.d, c.secA = q.a, c.secB = q.b;
     c.gap = sphereGapAt(f.pos[i], f.pos[i + 1], centre, body.parts[part].radius, c, c.s, c.normal, c.point);
+    // The measure memory (capMeasure's rule): the section, turned since the last step, may not
+    // reach into the sphere beyond what its held frame (or, new, its half-thickness all round) does.
+    BodyContact k = c;
+    if (held) k.secU = held->secU, k.secD = held->secD, k.secA = held->secA, k.secB = held->secB;
+    else k.secA = q.b;
+    k.gap = sphereGapAt(f.pos[i], f.pos[i + 1], centre, body.parts[part].radius, k, k.s, k.normal, k.point);
+    if (c.gap < std::min(k.gap, Real(0))) c = k;
     if (!listed(c, (1 - c.s) * f.vel[i] + c.s * f.vel[i + 1])) return 0;
     out[0] = c;
     return 1;
@@ -334,13 +359,21 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
   const OBB box = body.partBox(part);
   Vec3 u[2], d[2];
   SemiAxes ax[2];
-  for (int k = 0; k < 2; ++k)
-    nodeFrame(f, i + k, tangent ? (*tangent)[i + k] : yarnTangentAt(f, i + k), rule, u[k], d[k], ax[k]);
+  for (int k = 0; k < 2; ++k) nodeFrame(f, i + k, yarnTangent(f, cp, k, tangent), rule, u[k], d[k], ax[k]);
+  // The measure memory (capMeasure's rule), on every face: each end section's support may grow
+  // only into the room the box leaves, beyond its support at the last step on the same face (a new
+  // contact, or another face: its half-thickness). Then the face that leaves the CP the most room.
   Real best = -INFINITY;
   for (int j = 0; j < 6; ++j) {
     const Vec3 n = (j < 3 ? 1.0 : -1.0) * box.axes.col(j % 3);
+    const bool sameFace = held && held->localNormal.dot(box.axes.transpose() * n) > 0.999;
+    const Real boxMin = box.centre.dot(n) - (box.axes.transpose() * n).cwiseAbs().dot(box.extent);
     BodyContact h;
-    for (int k = 0; k < 2; ++k) h.support[k] = ellipseSupport(u[k], d[k], ax[k].a, ax[k].b, n);
+    for (int k = 0; k < 2; ++k) {
+      const Real room = boxMin - f.pos[i + k].dot(n);
+      h.support[k] = std::min(ellipseSupport(u[k], d[k], ax[k].a, ax[k].b, n),
+                              std::max(sameFace ? held->support[k] : ax[k].b, room));
+    }
     const Real g = std::min(boxGapAt(f, cp, box, n, h, 0), boxGapAt(f, cp, box, n, h, 1));
     if (g > best) best = g, c.normal = n, c.support[0] = h.support[0], c.support[1] = h.support[1];
   }

@@ -84,9 +84,11 @@ void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections, c
 /// CP-body contacts of the gap model in out[] (the sphere form: 1; the box form: one per end section
 /// that can touch), each listed when g <= margin + the approach within dt (relative normal velocity
 /// of the two points: a speculative contact, whose row lets the pair close exactly its gap).
+/// `held` (may be null) is the same CP and part's contact of the last step: the sections' measure
+/// may grow only into room (capMeasure's rule; without one, the half-thickness is the reference).
 /// Returns the count.
 int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
-            BodyContact out[2], const Vec3Array* tangent = nullptr);
+            BodyContact out[2], const Vec3Array* tangent = nullptr, const BodyContact* held = nullptr);
 
 /// Measures body contact c again at the current positions and pose (its normal held for a box, its
 /// section frame held for a sphere): g(x, body pose). Sets gap, point, s and normal (sphere).

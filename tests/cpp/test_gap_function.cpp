@@ -281,3 +281,64 @@ TEST(GapFunction, APiecePushedThroughKeepsItsSide) {
   EXPECT_LT(c[0].normal.z(), 0);
   EXPECT_GT(c[0].gap, 0);
 }
+
+// The measure memory (capMeasure): the sections' measure hA + hB may grow between steps only into
+// the room the axes leave. Exact arithmetic on a crossing: r = gap + hA + hB is kept, the measure is
+// min(H, max(remembered, r)) shared in the proportion hA : hB, and the point stays half way.
+TEST(GapFunction, MeasureMemoryLetsTheMeasureGrowOnlyIntoRoom) {
+  std::mt19937_64 rng(21);
+  for (int trial = 0; trial < 1000; ++trial) {
+    const Real z = 0.05e-3 + 0.1e-3 * std::uniform_real_distribution<Real>(0, 1)(rng);
+    Fabric f = randomPair(rng, Vec3(-0.4e-3, 0, 0), Vec3(0.4e-3, 0, 0), Vec3(0, -0.4e-3, z), Vec3(0, 0.4e-3, z));
+    CPContact c[2];
+    ASSERT_EQ(pairGaps(f, 0, 1, false, SectionRule::ConstantArea, nullptr, c), 1);
+    const CPContact c0 = c[0];
+    const Real H = c0.hA + c0.hB, r = c0.gap + H;
+    ASSERT_NEAR(r, z, 1e-15);
+    for (const Real remembered : {0.0, 0.5 * r, 0.999 * r, 1.001 * r, 0.5 * (r + H), H, 2 * H}) {
+      CPContact k = c0;
+      capMeasure(k, remembered);
+      const Real cap = std::max(remembered, r), used = std::min(H, cap);
+      EXPECT_NEAR(k.hA + k.hB, used, 1e-18);
+      EXPECT_NEAR(k.gap, r - used, 1e-18);                      // never below min(r - remembered, r - H)
+      EXPECT_GE(k.gap, std::min(r - H, std::min(Real(0), r - remembered)) - 1e-18);
+      EXPECT_NEAR(k.hA * c0.hB, k.hB * c0.hA, 1e-14 * c0.hA * c0.hB);  // shared as before
+      const Vec3 pA = c0.point - (c0.hA + 0.5 * c0.gap) * c0.normal;
+      EXPECT_LT((k.point - (pA + (k.hA + 0.5 * k.gap) * k.normal)).norm(), 1e-18);
+      if (remembered >= H) EXPECT_EQ(k.gap, c0.gap);            // room enough: untouched, bit for bit
+      // The cap holds for the rest of the step: sections measured again (after flattening) obey it.
+      CPContact again = k;
+      remeasure(f, again, SectionRule::ConstantArea, true);
+      EXPECT_LE(again.hA + again.hB, k.hCap * (1 + 1e-15));
+    }
+  }
+}
+
+// Skew pieces side by side (10 degrees apart, an X seen from above, the axes 60 um apart at its
+// centre): the ends of the shared part see the axes farther apart than they come, so the closest
+// point must be one of the manifold's points, with the gap of the axes' true distance there.
+TEST(GapFunction, SkewSideBySidePiecesHoldTheirClosestApproach) {
+  std::mt19937_64 rng(22);
+  const Real d = 60e-6, L = 0.4e-3, a = 10 * 3.14159265358979323846 / 180;
+  const Vec3 u(std::cos(a), std::sin(a), 0);
+  Fabric f = randomPair(rng, Vec3(-L, 0, 0), Vec3(L, 0, 0), Vec3(0, 0, d) - L * u, Vec3(0, 0, d) + L * u);
+  CPContact c[2];
+  ASSERT_EQ(pairGaps(f, 0, 1, true, SectionRule::ConstantArea, nullptr, c), 2);
+  int atCentre = 0;
+  for (int q = 0; q < 2; ++q) {
+    EXPECT_EQ(c[q].kind, ContactKind::Side);
+    if (std::abs(c[q].sA - 0.5) < 1e-9) {
+      ++atCentre;
+      EXPECT_NEAR(c[q].sB, 0.5, 1e-9);
+      EXPECT_NEAR(c[q].gap + c[q].hA + c[q].hB, d, 1e-15);  // the axes' distance at the X's centre
+    } else {
+      EXPECT_GT(c[q].gap + c[q].hA + c[q].hB, d + 1e-6);    // an end: farther apart
+    }
+  }
+  EXPECT_EQ(atCentre, 1);
+  // Parallel pieces (no crossing inside): the two ends, as a line contact.
+  Fabric g = randomPair(rng, Vec3(-L, 0, 0), Vec3(L, 0, 0), Vec3(-L, 0, d), Vec3(L, 0, d));
+  ASSERT_EQ(pairGaps(g, 0, 1, true, SectionRule::ConstantArea, nullptr, c), 2);
+  EXPECT_NEAR(std::min(c[0].sA, c[1].sA), 0.0, 1e-12);
+  EXPECT_NEAR(std::max(c[0].sA, c[1].sA), 1.0, 1e-12);
+}
