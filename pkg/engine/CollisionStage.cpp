@@ -309,6 +309,10 @@ void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
   bodyCollider.collide(f, grown_, grow_, bodies, dt, bodyPairs_);
   BodyContact c[2];
   const bool gapModel = params_.model == ContactModel::Gap;
+  // The position projection may move a node by this much after the drift (toward the body, pushed
+  // by its other contacts): such contacts are listed too, as the CP pairs are (narrow).
+  const Real projectionReach =
+      dt > 0 && params_.projectionSweepCount() > 0 ? kProjectionTravel * params_.projectionMaxMove : 0.0;
   for (const BodyCandidate& pc : bodyPairs_) {
     const BodyContact* held = nullptr;
     if (gapModel) {
@@ -316,7 +320,8 @@ void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
                                        std::make_pair(key(pc.cp, pc.body, pc.part), std::size_t(0)));
       if (it != heldKeys_.end() && it->first == key(pc.cp, pc.body, pc.part)) held = &heldBody_[it->second];
     }
-    const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin, params_.rule, c, &tangent_, held)
+    const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin + projectionReach, params_.rule, c,
+                                     &tangent_, held)
                            : cpBodyContact(f, bounds_[pc.cp], pc.cp, bodies[pc.body], pc.part, dt, params_.margin,
                                            params_.rule, c[0]);
     for (int q = 0; q < m; ++q) {

@@ -47,6 +47,7 @@ struct CPContact {
   /// memory"); +inf for a pair measured for the first time [m].
   Real hCap = std::numeric_limits<Real>::infinity();
   Vec3 hDir = Vec3::UnitZ();     ///< gap model: the direction they are measured (and flattened) along (GapFunction.hpp)
+  bool closest = false;          ///< gap model, side by side: the point is the axes' closest approach (it moves along)
 };
 
 /// Static contact of CPs a < b: true (and `out`) when their boxes overlap. The boxes give the normal

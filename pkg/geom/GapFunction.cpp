@@ -202,6 +202,7 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
         const Real s = at[k];
         fillPair(f, a, b, s, alongCP(f, b, (1 - s) * f.pos[i] + s * f.pos[i + 1]), ContactKind::Side, rule,
                  orient ? orient + k : nullptr, true, tangent, out[k]);
+        out[k].closest = n == 2 && s != lo && s != hi;
       }
       return n;
     }
@@ -217,7 +218,7 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
 void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections, const Vec3Array* tangent) {
   const Index i = f.elem0[c.cpA], j = f.elem0[c.cpB];
   Real s = c.sA, t;
-  if (c.kind == ContactKind::Side) {
+  if (c.kind == ContactKind::Side && !c.closest) {
     t = alongCP(f, c.cpB, (1 - s) * f.pos[i] + s * f.pos[i + 1]);
   } else {
     const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
