@@ -6,6 +6,7 @@
 #include "core/Errors.hpp"
 #include "core/Parallel.hpp"
 #include "engine/FabricEngine.hpp"
+#include "engine/Snapshot.hpp"
 #include "geom/SeparatingAxis.hpp"
 #include "weave/WeaveBuilder.hpp"
 #include <memory>
@@ -612,5 +613,17 @@ BOOST_PYTHON_MODULE(_woven) {
       })
       .def("_section_dirs", +[](FabricEngine& e) { return bytesOf(e.fabric().secDir); })
       .def("_section_flattening", +[](FabricEngine& e) { return bytesOf(e.fabric().secFlat); })
-      .def("_section_semi_axes", &semiAxesPy);
+      .def("_section_semi_axes", &semiAxesPy)
+      // The whole engine as bytes (pkg/engine/Snapshot.hpp; the native YADE plugin's O.save format);
+      // forgets the carried contacts as save_state does.
+      .def("_snapshot", +[](FabricEngine& e) {
+        const std::string b = engineSnapshot(e);
+        return bp::object(bp::handle<>(PyBytes_FromStringAndSize(b.data(), static_cast<Py_ssize_t>(b.size()))));
+      });
+  bp::def("_engine_from_snapshot", +[](bp::object bytes) {
+    char* data = nullptr;
+    Py_ssize_t n = 0;
+    if (PyBytes_AsStringAndSize(bytes.ptr(), &data, &n) != 0) bp::throw_error_already_set();
+    return restoreSnapshot(std::string(data, static_cast<std::size_t>(n)));
+  }, (bp::arg("snapshot")), "A FabricEngine rebuilt from FabricEngine._snapshot() bytes, continuing bit for bit.");
 }

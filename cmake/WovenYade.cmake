@@ -1,0 +1,100 @@
+# The native YADE plugin (docs/yade_native.md), built only with -DYADE_SOURCE_DIR=<YADE's source tree>.
+# Included from CMakeLists.txt after Python3 and Boost are found. Defines:
+#   woven_core_native  the core as a shared library, with Eigen's alignment as YADE's (EIGEN_DONT_ALIGN):
+#                      the Python module _woven and the plugin share it, so a woven.FabricEngine made by
+#                      a script is the very object the plugin's engine steps
+#   woven_yade         libwoven_yade.so, the YADE classes (WovenFabricEngine, ...), loaded by yade
+#   woven_newprobe     a tiny operator-new recorder for the ABI test (tests/yade/abi_sizes.py)
+# and sets WOVEN_PY_CORE (what _woven links) and WOVEN_YADE_PLUGIN_DIR (where both libraries go).
+if(NOT EXISTS "${YADE_SOURCE_DIR}/core/Scene.hpp" OR NOT EXISTS "${YADE_SOURCE_DIR}/lib/serialization/Serializable.hpp")
+  message(FATAL_ERROR "YADE_SOURCE_DIR = ${YADE_SOURCE_DIR} is invalid: allowed YADE's source tree (core/Scene.hpp, "
+                      "lib/serialization/Serializable.hpp), e.g. `apt-get source yade` or YADE's repository at tag 2023.02a")
+endif()
+if(NOT WOVEN_PYTHON)
+  message(FATAL_ERROR "YADE_SOURCE_DIR needs WOVEN_PYTHON=ON (scripts build the fabric through the Python module)")
+endif()
+
+# --- the installed YADE's compile definitions, read from yade.config at configure time -----------
+find_program(WOVEN_YADE_EXECUTABLE NAMES yade REQUIRED)
+set(_cfg "${CMAKE_BINARY_DIR}/yade_config.cmake")
+execute_process(COMMAND ${WOVEN_YADE_EXECUTABLE} -n -x "${CMAKE_CURRENT_SOURCE_DIR}/cmake/yade_config.py" "${_cfg}"
+                RESULT_VARIABLE _rc OUTPUT_VARIABLE _out ERROR_VARIABLE _err TIMEOUT 600)
+if(NOT _rc EQUAL 0 OR NOT EXISTS "${_cfg}")
+  message(FATAL_ERROR "`${WOVEN_YADE_EXECUTABLE} -n -x cmake/yade_config.py` failed (${_rc}): ${_err}")
+endif()
+include("${_cfg}")
+if(NOT WOVEN_YADE_REAL_BITS EQUAL 64)
+  message(FATAL_ERROR "the installed YADE computes with ${WOVEN_YADE_REAL_BITS}-bit Real: woven needs yade-double (64)")
+endif()
+if(WOVEN_YADE_UNKNOWN_FEATURES)
+  message(WARNING "YADE features woven does not know how to map to definitions: ${WOVEN_YADE_UNKNOWN_FEATURES}; the ABI test will tell")
+endif()
+message(STATUS "woven native: YADE ${WOVEN_YADE_VERSION} in ${WOVEN_YADE_LIBDIR}; definitions ${WOVEN_YADE_DEFINES}")
+# The alignment definitions decide the layout of Eigen members (YADE's State, woven's RigidBody):
+# every target sharing objects with libyade or with each other takes them. EIGEN_DONT_VECTORIZE only
+# changes code, not layout: woven's own code keeps Eigen's vectorization (WOVEN_YADE_KEEP_VECTORIZE,
+# default ON) so the native build computes the same bits as the default build (Eigen's SSE2
+# quaternion product rounds differently from its scalar one).
+option(WOVEN_YADE_KEEP_VECTORIZE "Native build: keep Eigen's vectorization in woven's code (same bits as the default build)" ON)
+set(WOVEN_EIGEN_LAYOUT_DEFINES "")
+foreach(_d EIGEN_DONT_ALIGN EIGEN_DISABLE_UNALIGNED_ARRAY_ASSERT)
+  if(_d IN_LIST WOVEN_YADE_DEFINES)
+    list(APPEND WOVEN_EIGEN_LAYOUT_DEFINES ${_d})
+  endif()
+endforeach()
+set(WOVEN_PLUGIN_DEFINES ${WOVEN_YADE_DEFINES})
+if(WOVEN_YADE_KEEP_VECTORIZE)
+  list(REMOVE_ITEM WOVEN_PLUGIN_DEFINES EIGEN_DONT_VECTORIZE)
+endif()
+
+# --- where yade finds the plugin ------------------------------------------------------------------
+# yade loads every lib*.so under <prefix>/<libPATH>/yade<suffix>/ (recursively). Default: the `woven`
+# subfolder of a prefix under the build tree's install prefix; a root install sets
+# -DWOVEN_YADE_PLUGIN_DIR=/usr/lib/x86_64-linux-gnu/yade-double/woven (README).
+set(WOVEN_YADE_PLUGIN_DIR "${CMAKE_INSTALL_PREFIX}/${WOVEN_YADE_LIBPATH}/yade${WOVEN_YADE_SUFFIX}/woven" CACHE PATH
+    "Folder of libwoven_yade.so and libwoven_core.so (a subfolder of a yade-double folder yade searches)")
+
+# --- the core, shared -----------------------------------------------------------------------------
+add_library(woven_core_native SHARED ${WOVEN_CORE_SOURCES})
+set_target_properties(woven_core_native PROPERTIES OUTPUT_NAME woven_core)
+target_include_directories(woven_core_native PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/pkg)
+target_compile_definitions(woven_core_native PUBLIC ${WOVEN_EIGEN_LAYOUT_DEFINES})
+target_link_libraries(woven_core_native PUBLIC Eigen3::Eigen OpenMP::OpenMP_CXX)
+set(WOVEN_PY_CORE woven_core_native)
+
+# --- the plugin -----------------------------------------------------------------------------------
+find_path(WOVEN_MPI_INCLUDE_DIR mpi.h PATHS /usr/lib/x86_64-linux-gnu/openmpi/include /usr/include/x86_64-linux-gnu/openmpi)
+if("YADE_MPI" IN_LIST WOVEN_YADE_DEFINES AND NOT WOVEN_MPI_INCLUDE_DIR)
+  message(FATAL_ERROR "YADE was built with MPI (Scene's layout depends on it): mpi.h is needed: apt-get install libopenmpi-dev")
+endif()
+set(_yade_libs "")
+foreach(_l yade pkg_common pkg_dem)
+  set(_p "${WOVEN_YADE_LIBDIR}/lib${_l}.so")
+  if(NOT EXISTS "${_p}")
+    message(FATAL_ERROR "${_p} not found: the native plugin links YADE's libyade, libpkg_common and libpkg_dem")
+  endif()
+  list(APPEND _yade_libs "${_p}")
+endforeach()
+file(GLOB WOVEN_YADE_SOURCES CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/pkg/yade/*.cpp)
+add_library(woven_yade SHARED ${WOVEN_YADE_SOURCES})
+# YADE's headers need GNU extensions (float128 literals) and its include root; woven's pkg/ comes first
+# (its core/Types.hpp beside YADE's core/).
+set_target_properties(woven_yade PROPERTIES CXX_EXTENSIONS ON)
+target_include_directories(woven_yade PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/pkg ${YADE_SOURCE_DIR} ${Python3_INCLUDE_DIRS})
+if(WOVEN_MPI_INCLUDE_DIR)
+  target_include_directories(woven_yade SYSTEM PRIVATE ${WOVEN_MPI_INCLUDE_DIR})
+endif()
+target_compile_definitions(woven_yade PRIVATE ${WOVEN_PLUGIN_DEFINES} BOOST_BIND_GLOBAL_PLACEHOLDERS BOOST_ALLOW_DEPRECATED_HEADERS)
+if("YADE_CGAL" IN_LIST WOVEN_YADE_DEFINES)
+  target_compile_options(woven_yade PRIVATE -frounding-math)
+endif()
+target_compile_options(woven_yade PRIVATE -Wno-unused-parameter -Wno-deprecated-declarations)
+# Boost and Python symbols come from the running yade: no --no-undefined.
+target_link_libraries(woven_yade PRIVATE woven_core_native ${_yade_libs})
+set_target_properties(woven_yade PROPERTIES BUILD_RPATH "${WOVEN_YADE_LIBDIR};$<TARGET_FILE_DIR:woven_core_native>"
+                                            INSTALL_RPATH "${WOVEN_YADE_LIBDIR};${WOVEN_YADE_PLUGIN_DIR}")
+set_target_properties(woven_core_native PROPERTIES INSTALL_RPATH "${WOVEN_YADE_PLUGIN_DIR}")
+install(TARGETS woven_yade woven_core_native LIBRARY DESTINATION ${WOVEN_YADE_PLUGIN_DIR})
+
+# --- the ABI probe: records the sizes operator new is asked for (LD_PRELOAD'ed into a yade run) ----
+add_library(woven_newprobe SHARED ${CMAKE_CURRENT_SOURCE_DIR}/tests/yade/newprobe.cpp)
