@@ -98,3 +98,10 @@ install(TARGETS woven_yade woven_core_native LIBRARY DESTINATION ${WOVEN_YADE_PL
 
 # --- the ABI probe: records the sizes operator new is asked for (LD_PRELOAD'ed into a yade run) ----
 add_library(woven_newprobe SHARED ${CMAKE_CURRENT_SOURCE_DIR}/tests/yade/newprobe.cpp)
+set_target_properties(woven_newprobe PROPERTIES OUTPUT_NAME woven_newprobe)
+# CTest of the native build: the plugin's class sizes against the installed libyade (run after
+# `cmake --install` and scripts/yade_prefix.sh, with YADE_PREFIX pointing at the prefix).
+enable_testing()
+add_test(NAME yade_abi_sizes
+         COMMAND ${CMAKE_COMMAND} -E env LD_PRELOAD=$<TARGET_FILE:woven_newprobe> YADE_PREFIX=${CMAKE_INSTALL_PREFIX}
+                 ${WOVEN_YADE_EXECUTABLE} -n -x ${CMAKE_CURRENT_SOURCE_DIR}/tests/yade/abi_sizes.py)

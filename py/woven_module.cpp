@@ -616,10 +616,14 @@ BOOST_PYTHON_MODULE(_woven) {
       .def("_section_semi_axes", &semiAxesPy)
       // The whole engine as bytes (pkg/engine/Snapshot.hpp; the native YADE plugin's O.save format);
       // forgets the carried contacts as save_state does.
+      .def("_same", +[](FabricEngine& a, FabricEngine& b) { return &a == &b; }, (bp::arg("other")))
       .def("_snapshot", +[](FabricEngine& e) {
         const std::string b = engineSnapshot(e);
         return bp::object(bp::handle<>(PyBytes_FromStringAndSize(b.data(), static_cast<Py_ssize_t>(b.size()))));
       });
+  // Identity of the core library this module calls: the native YADE plugin's engine steps objects of
+  // this module only when both call the same shared core (py/woven/_native.py).
+  bp::def("_core_id", +[]() { return static_cast<long>(reinterpret_cast<std::uintptr_t>(&engineSnapshot)); });
   bp::def("_engine_from_snapshot", +[](bp::object bytes) {
     char* data = nullptr;
     Py_ssize_t n = 0;

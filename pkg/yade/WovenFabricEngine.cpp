@@ -5,6 +5,7 @@
 #include "engine/Snapshot.hpp"
 #include <core/Scene.hpp>
 #include <lib/pyutil/gil.hpp>
+#include <cstdint>
 
 namespace yade {
 
@@ -18,7 +19,7 @@ void reportToPython(const char* kind, const std::exception& e, long step, long n
 {
 	gilLock lock;
 	try {
-		boost::python::import("woven.engine").attr("_native_failed")(kind, std::string(e.what()), step, node, element, cause);
+		boost::python::import("woven._native").attr("_failed")(kind, std::string(e.what()), step, node, element, cause);
 	} catch (const boost::python::error_already_set&) {
 		PyErr_Clear(); // woven not imported (a scene loaded without it): the message still stops the run
 	}
@@ -94,6 +95,8 @@ boost::python::object WovenFabricEngine::pyFabric()
 	boost::python::import("woven._woven"); // registers the Python class of woven::FabricEngine
 	return boost::python::object(fabric);
 }
+
+long WovenFabricEngine::coreId() const { return static_cast<long>(reinterpret_cast<std::uintptr_t>(&woven::engineSnapshot)); }
 
 long WovenFabricEngine::nodes() const { return fabric ? static_cast<long>(fabric->fabric().nNodes()) : 0; }
 

@@ -1,0 +1,72 @@
+"""The native engine of the YADE plugin (docs/yade_native.md), when it is there.
+
+A build with -DYADE_SOURCE_DIR=... installs libwoven_yade.so where yade loads plugins from; its
+yade.wrapper.WovenFabricEngine is a GlobalEngine that steps the very woven.FabricEngine a script made
+(the plugin and woven._woven share one core library), so no Python runs in the loop and O.save /
+O.load keep the whole fabric. woven.attach uses it when:
+  - yade.wrapper has WovenFabricEngine (the plugin is loaded), and
+  - woven._woven was built against the same core library (_woven._core_id() equals the plugin's
+    WovenFabricEngine.coreId: a default-build _woven has its own core, of another layout), and
+  - WOVEN_NATIVE is not '0' in the environment (WOVEN_NATIVE=0 forces the PyRunner adapter).
+WOVEN_NATIVE=1 makes a missing or mismatched plugin an error instead of a silent fallback.
+"""
+import os
+
+import yade.wrapper
+
+from . import _woven
+
+
+def why_not():
+    """'' when the native engine can be used, else the reason it cannot."""
+    if not hasattr(yade.wrapper, 'WovenFabricEngine'):
+        return ('yade.wrapper has no WovenFabricEngine: the plugin libwoven_yade.so is not loaded (build with '
+                '-DYADE_SOURCE_DIR=..., install, and run yade with YADE_PREFIX set to its prefix; docs/yade_native.md)')
+    core = getattr(_woven, '_core_id', None)
+    if core is None or core() != yade.wrapper.WovenFabricEngine().coreId:
+        return ('woven._woven and the plugin do not share one core library (a default-build woven package with the '
+                'native plugin): install both from the same -DYADE_SOURCE_DIR build')
+    return ''
+
+
+def wanted():
+    """True when woven.attach should put the native engine into O.engines (see the module's doc)."""
+    flag = os.environ.get('WOVEN_NATIVE', '')
+    if flag == '0':
+        return False
+    reason = why_not()
+    if reason and flag == '1':
+        raise RuntimeError('WOVEN_NATIVE=1 but the native engine cannot be used: ' + reason)
+    return not reason
+
+
+def attached(engine, engines):
+    """The WovenFabricEngine of `engines` that steps `engine` already, or None."""
+    for e in engines:
+        if type(e).__name__ == 'WovenFabricEngine' and e.fabric is not None and e.fabric._same(engine):
+            return e
+    return None
+
+
+def make(engine, rewind, label=None):
+    """A WovenFabricEngine stepping `engine` (rewind: coupled bodies were moved by a NewtonIntegrator first)."""
+    n = yade.wrapper.WovenFabricEngine()
+    n.adopt(engine)
+    n.rewind = bool(rewind)
+    if label:
+        n.label = label
+    return n
+
+
+def _failed(kind, message, step, node, element, cause):
+    """Called by the native engine when a step raises: sets woven.engine.last_error as the PyRunner
+    adapter does, so scene scripts tell an instability from other errors the same way in both builds."""
+    from . import engine
+    if kind == 'instability':
+        err = _woven.InstabilityError(message)
+        err.step, err.node, err.element, err.cause = step, node, element, cause
+    elif kind == 'parameter':
+        err = ValueError(message)
+    else:
+        err = RuntimeError(message)
+    engine.last_error = err
