@@ -1,8 +1,8 @@
 # The native YADE plugin (docs/yade_native.md), built only with -DYADE_SOURCE_DIR=<YADE's source tree>.
 # Included from CMakeLists.txt after Python3 and Boost are found. Defines:
-#   woven_core_native  the core as a shared library, with Eigen's alignment as YADE's (EIGEN_DONT_ALIGN):
-#                      the Python module _woven and the plugin share it, so a woven.FabricEngine made by
-#                      a script is the very object the plugin's engine steps
+#   woven_core_native  the core as a shared library (the default build's flags): the Python module _woven
+#                      and the plugin share it, so a woven.FabricEngine made by a script is the very
+#                      object the plugin's engine steps
 #   woven_yade         libwoven_yade.so, the YADE classes (WovenFabricEngine, ...), loaded by yade
 #   woven_newprobe     a tiny operator-new recorder for the ABI test (tests/yade/abi_sizes.py)
 # and sets WOVEN_PY_CORE (what _woven links) and WOVEN_YADE_PLUGIN_DIR (where both libraries go).
@@ -30,22 +30,10 @@ if(WOVEN_YADE_UNKNOWN_FEATURES)
   message(WARNING "YADE features woven does not know how to map to definitions: ${WOVEN_YADE_UNKNOWN_FEATURES}; the ABI test will tell")
 endif()
 message(STATUS "woven native: YADE ${WOVEN_YADE_VERSION} in ${WOVEN_YADE_LIBDIR}; definitions ${WOVEN_YADE_DEFINES}")
-# The alignment definitions decide the layout of Eigen members (YADE's State, woven's RigidBody):
-# every target sharing objects with libyade or with each other takes them. EIGEN_DONT_VECTORIZE only
-# changes code, not layout: woven's own code keeps Eigen's vectorization (WOVEN_YADE_KEEP_VECTORIZE,
-# default ON) so the native build computes the same bits as the default build (Eigen's SSE2
-# quaternion product rounds differently from its scalar one).
-option(WOVEN_YADE_KEEP_VECTORIZE "Native build: keep Eigen's vectorization in woven's code (same bits as the default build)" ON)
-set(WOVEN_EIGEN_LAYOUT_DEFINES "")
-foreach(_d EIGEN_DONT_ALIGN EIGEN_DISABLE_UNALIGNED_ARRAY_ASSERT)
-  if(_d IN_LIST WOVEN_YADE_DEFINES)
-    list(APPEND WOVEN_EIGEN_LAYOUT_DEFINES ${_d})
-  endif()
-endforeach()
-set(WOVEN_PLUGIN_DEFINES ${WOVEN_YADE_DEFINES})
-if(WOVEN_YADE_KEEP_VECTORIZE)
-  list(REMOVE_ITEM WOVEN_PLUGIN_DEFINES EIGEN_DONT_VECTORIZE)
-endif()
+# The plugin's sources see YADE's classes only, compiled exactly as libyade (all of YADE's definitions,
+# EIGEN_DONT_ALIGN and EIGEN_DONT_VECTORIZE included: they change Eigen's layout and rounding), and
+# woven's engine only as an opaque type through pkg/engine/HostBridge.hpp. The core keeps the default
+# build's flags (Eigen aligned and vectorized), so its code and its bits are the default build's.
 
 # --- where yade finds the plugin ------------------------------------------------------------------
 # yade loads every lib*.so under <prefix>/<libPATH>/yade<suffix>/ (recursively). Default: the `woven`
@@ -58,7 +46,6 @@ set(WOVEN_YADE_PLUGIN_DIR "${CMAKE_INSTALL_PREFIX}/${WOVEN_YADE_LIBPATH}/yade${W
 add_library(woven_core_native SHARED ${WOVEN_CORE_SOURCES})
 set_target_properties(woven_core_native PROPERTIES OUTPUT_NAME woven_core)
 target_include_directories(woven_core_native PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/pkg)
-target_compile_definitions(woven_core_native PUBLIC ${WOVEN_EIGEN_LAYOUT_DEFINES})
 target_link_libraries(woven_core_native PUBLIC Eigen3::Eigen OpenMP::OpenMP_CXX)
 set(WOVEN_PY_CORE woven_core_native)
 
@@ -84,11 +71,12 @@ target_include_directories(woven_yade PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/pkg ${
 if(WOVEN_MPI_INCLUDE_DIR)
   target_include_directories(woven_yade SYSTEM PRIVATE ${WOVEN_MPI_INCLUDE_DIR})
 endif()
-target_compile_definitions(woven_yade PRIVATE ${WOVEN_PLUGIN_DEFINES} BOOST_BIND_GLOBAL_PLACEHOLDERS BOOST_ALLOW_DEPRECATED_HEADERS)
+target_compile_definitions(woven_yade PRIVATE ${WOVEN_YADE_DEFINES} BOOST_BIND_GLOBAL_PLACEHOLDERS BOOST_ALLOW_DEPRECATED_HEADERS)
 if("YADE_CGAL" IN_LIST WOVEN_YADE_DEFINES)
   target_compile_options(woven_yade PRIVATE -frounding-math)
 endif()
-target_compile_options(woven_yade PRIVATE -Wno-unused-parameter -Wno-deprecated-declarations)
+# Inline functions the plugin emits stay in it (never interpose on libyade's or the core's copies).
+target_compile_options(woven_yade PRIVATE -fvisibility-inlines-hidden -Wno-unused-parameter -Wno-deprecated-declarations)
 # Boost and Python symbols come from the running yade: no --no-undefined.
 target_link_libraries(woven_yade PRIVATE woven_core_native ${_yade_libs})
 set_target_properties(woven_yade PROPERTIES BUILD_RPATH "${WOVEN_YADE_LIBDIR};$<TARGET_FILE_DIR:woven_core_native>"

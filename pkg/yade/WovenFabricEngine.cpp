@@ -1,8 +1,6 @@
 #include "WovenFabricEngine.hpp"
 #include "Base64.hpp"
 #include "core/Errors.hpp"
-#include "engine/FabricEngine.hpp"
-#include "engine/Snapshot.hpp"
 #include <core/Scene.hpp>
 #include <lib/pyutil/gil.hpp>
 #include <cstdint>
@@ -30,28 +28,19 @@ void reportToPython(const char* kind, const std::exception& e, long step, long n
 void WovenFabricEngine::action()
 {
 	if (!fabric) throw std::runtime_error("WovenFabricEngine: no fabric (woven.attach(engine) or WovenFabricEngine.adopt(engine) first)");
-	woven::CollisionStage* st = fabric->collisions();
-	const Real             dt = scene->dt;
-	// Coupled bodies in: pose x_n (rewound over the NewtonIntegrator's drift) and velocities v_{n+1/2}.
-	// The same operations as _yade_step of the default build (py/woven_module.cpp), so the same bits.
-	if (st) {
-		for (woven::RigidBody& b : st->bodies) {
-			const shared_ptr<Body>& body = Body::byId(static_cast<Body::id_t>(b.id), scene);
-			if (!body) throw std::runtime_error("WovenFabricEngine: coupled body " + std::to_string(b.id) + " is not in O.bodies");
-			const State& s   = *body->state;
-			woven::Vec3  pos = s.pos;
-			woven::Quat  ori = s.ori;
-			const woven::Vec3 vel = s.vel, w = s.angVel;
-			if (rewind) {
-				pos -= dt * vel;
-				const Real angle = w.norm() * dt;
-				if (angle > 0) ori = (woven::Quat(Eigen::AngleAxis<Real>(-angle, w.normalized())) * ori).normalized();
-			}
-			b.pos = pos, b.ori = ori, b.vel = vel, b.angVel = w;
-		}
+	// Coupled bodies in (pose x_n, rewound over the NewtonIntegrator's drift, velocities v_{n+1/2}),
+	// one step, their new state out: woven::hostStep, the PyRunner adapter's operations in the core.
+	woven::hostBodies(*fabric, bodies_);
+	for (woven::HostBody& h : bodies_) {
+		const shared_ptr<Body>& body = Body::byId(static_cast<Body::id_t>(h.id), scene);
+		if (!body) throw std::runtime_error("WovenFabricEngine: coupled body " + std::to_string(h.id) + " is not in O.bodies");
+		const State& s = *body->state;
+		for (int i = 0; i < 3; ++i)
+			h.pos[i] = s.pos[i], h.vel[i] = s.vel[i], h.angVel[i] = s.angVel[i];
+		h.ori[0] = s.ori.x(), h.ori[1] = s.ori.y(), h.ori[2] = s.ori.z(), h.ori[3] = s.ori.w();
 	}
 	try {
-		fabric->step(dt);
+		woven::hostStep(*fabric, scene->dt, bodies_, rewind);
 	} catch (const woven::InstabilityError& e) {
 		lastError = e.what();
 		reportToPython("instability", e, e.step(), e.node(), e.element(), e.cause());
@@ -65,19 +54,14 @@ void WovenFabricEngine::action()
 		reportToPython("runtime", e, -1, -1, -1, "");
 		throw;
 	}
-	// Coupled bodies out: pose x_{n+1}, velocities, and the angular momentum YADE integrates an
-	// aspherical body (a clump) by.
-	if (st) {
-		for (const woven::RigidBody& b : st->bodies) {
-			if (!b.dynamic()) continue; // YADE moves kinematic bodies itself
-			State& s = *Body::byId(static_cast<Body::id_t>(b.id), scene)->state;
-			s.pos    = b.pos;
-			s.ori    = b.ori;
-			s.vel    = b.vel;
-			s.angVel = b.angVel;
-			const woven::Vec3 wl = b.ori.conjugate() * b.angVel;
-			s.angMom             = woven::Vec3(b.ori * woven::Vec3(b.inertia.cwiseProduct(wl)));
-		}
+	for (const woven::HostBody& h : bodies_) {
+		if (!h.dynamic) continue; // YADE moves kinematic bodies itself
+		State& s = *Body::byId(static_cast<Body::id_t>(h.id), scene)->state;
+		s.pos    = Vector3r(h.pos[0], h.pos[1], h.pos[2]);
+		s.ori    = Quaternionr(h.ori[3], h.ori[0], h.ori[1], h.ori[2]);
+		s.vel    = Vector3r(h.vel[0], h.vel[1], h.vel[2]);
+		s.angVel = Vector3r(h.angVel[0], h.angVel[1], h.angVel[2]);
+		s.angMom = Vector3r(h.angMom[0], h.angMom[1], h.angMom[2]);
 	}
 }
 
@@ -98,7 +82,7 @@ boost::python::object WovenFabricEngine::pyFabric()
 
 long WovenFabricEngine::coreId() const { return static_cast<long>(reinterpret_cast<std::uintptr_t>(&woven::engineSnapshot)); }
 
-long WovenFabricEngine::nodes() const { return fabric ? static_cast<long>(fabric->fabric().nNodes()) : 0; }
+long WovenFabricEngine::nodes() const { return fabric ? woven::hostNodes(*fabric) : 0; }
 
 void WovenFabricEngine::preSave(WovenFabricEngine&)
 {

@@ -6,13 +6,11 @@
 // O.save writes the whole fabric (woven::engineSnapshot, base64 in the hidden attribute `snapshot`),
 // O.load rebuilds it: the loaded run continues bit for bit as the one that saved it.
 #pragma once
+#include "engine/HostBridge.hpp" // woven's engine as an opaque type: no woven class layout is seen here
 #include <core/GlobalEngine.hpp>
 #include <memory>
 #include <string>
-
-namespace woven {
-class FabricEngine;
-}
+#include <vector>
 
 namespace yade {
 
@@ -29,6 +27,8 @@ public:
 	/// Address of a function of the core library this plugin calls (woven._native compares it with
 	/// woven._woven._core_id(): equal only when both use one shared core).
 	long coreId() const;
+
+	std::vector<woven::HostBody> bodies_; // coupled bodies of the step (scratch)
 
 	void preSave(WovenFabricEngine&);
 	void postSave(WovenFabricEngine&);
