@@ -78,7 +78,9 @@ endif()
 # Inline functions the plugin emits stay in it (never interpose on libyade's or the core's copies).
 target_compile_options(woven_yade PRIVATE -fvisibility-inlines-hidden -Wno-unused-parameter -Wno-deprecated-declarations)
 # Boost and Python symbols come from the running yade: no --no-undefined.
-target_link_libraries(woven_yade PRIVATE woven_core_native ${_yade_libs})
+# OpenGL (the drawer, pkg/yade/WovenGlDrawer.cpp): libGL, as libpkg_common's OpenGLRenderer uses.
+find_package(OpenGL REQUIRED COMPONENTS OpenGL)
+target_link_libraries(woven_yade PRIVATE woven_core_native ${_yade_libs} OpenGL::GL)
 set_target_properties(woven_yade PROPERTIES BUILD_RPATH "${WOVEN_YADE_LIBDIR};$<TARGET_FILE_DIR:woven_core_native>"
                                             INSTALL_RPATH "${WOVEN_YADE_LIBDIR};${WOVEN_YADE_PLUGIN_DIR}")
 set_target_properties(woven_core_native PROPERTIES INSTALL_RPATH "${WOVEN_YADE_PLUGIN_DIR}")

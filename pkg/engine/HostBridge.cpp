@@ -1,5 +1,6 @@
 #include "engine/HostBridge.hpp"
 #include "engine/FabricEngine.hpp"
+#include "shape/Section.hpp"
 #include <Eigen/Geometry>
 
 namespace woven {
@@ -45,5 +46,24 @@ void hostStep(FabricEngine& e, double dt, std::vector<HostBody>& bodies, bool re
 }
 
 long hostNodes(const FabricEngine& e) { return static_cast<long>(e.fabric().nNodes()); }
+
+void hostTubes(const FabricEngine& e, HostTubes& out) {
+  const Fabric& f = e.fabric();
+  const SectionRule rule = e.collisions() ? e.collisions()->params().rule : SectionRule::ConstantArea;
+  out.nodes.resize(8 * static_cast<std::size_t>(f.nNodes()));
+  for (Index i = 0; i < f.nNodes(); ++i) {
+    const SemiAxes s = semiAxes(f.secRadius[i], f.secFlat[i], rule);
+    double* n = &out.nodes[8 * static_cast<std::size_t>(i)];
+    n[0] = f.pos[i].x(), n[1] = f.pos[i].y(), n[2] = f.pos[i].z(), n[3] = s.a, n[4] = s.b;
+    n[5] = f.secDir[i].x(), n[6] = f.secDir[i].y(), n[7] = f.secDir[i].z();
+  }
+  out.elements.clear(), out.strain.clear();
+  for (Index el = 0; el < f.nElems(); ++el) {
+    if (!f.alive[el]) continue;
+    const Index a = f.elem0[el];
+    out.elements.push_back(a);
+    out.strain.push_back(((f.pos[a + 1] - f.pos[a]).norm() - f.restLength[el]) / f.restLength[el]);
+  }
+}
 
 }  // namespace woven

@@ -31,6 +31,17 @@ void hostBodies(const FabricEngine& e, std::vector<HostBody>& out);
 void hostStep(FabricEngine& e, double dt, std::vector<HostBody>& bodies, bool rewind);
 long hostNodes(const FabricEngine& e);
 
+/// What a viewer needs to draw the yarns as tubes of their elliptic sections, as plain numbers.
+struct HostTubes {
+  /// Per node: x y z [m], semi-axes a (major) b (minor) [m] with the collision stage's section rule
+  /// (constant area when collisions are off), minor-axis direction dx dy dz: 8 doubles per node.
+  std::vector<double> nodes;
+  /// Per live element (CP): its first node (the second is the next one) and its strain (l - l0)/l0.
+  std::vector<int> elements;
+  std::vector<double> strain;
+};
+void hostTubes(const FabricEngine& e, HostTubes& out);
+
 // pkg/engine/Snapshot.hpp, declared here for hosts that do not include woven's classes.
 std::string engineSnapshot(FabricEngine& e);
 std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes);

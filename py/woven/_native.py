@@ -70,3 +70,31 @@ def _failed(kind, message, step, node, element, cause):
     else:
         err = RuntimeError(message)
     engine.last_error = err
+
+
+def view(segments=12, scale=1.0, max_strain=0.05):
+    """Opens YADE's 3D view (yade.qt) with the yarns of every WovenFabricEngine drawn as tubes of their
+    elliptic sections (yade.wrapper.WovenGlDrawer, coloured by strain), framed on the fabric.
+    Needs the native plugin and a display (e.g. xvfb-run). Returns the view."""
+    reason = why_not()
+    if reason:
+        raise RuntimeError('woven view: ' + reason)
+    import numpy as np
+    from yade import qt
+    from .arrays import positions
+    O = yade.wrapper.Omega()
+    r = qt.Renderer()
+    r.extraDrawers = [d for d in r.extraDrawers if type(d).__name__ != 'WovenGlDrawer'] + [
+        yade.wrapper.WovenGlDrawer(segments=segments, scale=scale, maxStrain=max_strain)]
+    v = qt.View()
+    fabrics = [e.fabric for e in O.engines if type(e).__name__ == 'WovenFabricEngine' and e.fabric is not None]
+    if fabrics:
+        X = np.vstack([positions(f) for f in fabrics])
+        lo, hi = X.min(axis=0), X.max(axis=0)
+        from yade import Vector3
+        c = Vector3(*(0.5 * (lo + hi)))
+        radius = 0.5 * float(np.linalg.norm(hi - lo))
+        # YADE sizes its clipping planes from the bodies' bounds; the fabric is not made of bodies.
+        qt.center(suggestedRadius=radius, gridOrigin=c, suggestedCenter=c)
+        v.fitAABB(Vector3(*lo), Vector3(*hi))
+    return v
