@@ -95,3 +95,8 @@ enable_testing()
 add_test(NAME yade_abi_sizes
          COMMAND ${CMAKE_COMMAND} -E env LD_PRELOAD=$<TARGET_FILE:woven_newprobe> YADE_PREFIX=${CMAKE_INSTALL_PREFIX}
                  ${WOVEN_YADE_EXECUTABLE} -n -x ${CMAKE_CURRENT_SOURCE_DIR}/tests/yade/abi_sizes.py)
+# The native pytest file (tests/python/test_native.py) against the installed package and plugin.
+add_test(NAME yade_native_pytest
+         COMMAND ${CMAKE_COMMAND} -E env PYTHONPATH=${WOVEN_PYTHON_SITE} YADE_PREFIX=${CMAKE_INSTALL_PREFIX}
+                 OMP_WAIT_POLICY=passive ${Python3_EXECUTABLE} -m pytest -q ${CMAKE_CURRENT_SOURCE_DIR}/tests/python/test_native.py
+         WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/tests/python)
