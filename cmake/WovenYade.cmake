@@ -100,3 +100,22 @@ add_test(NAME yade_native_pytest
          COMMAND ${CMAKE_COMMAND} -E env PYTHONPATH=${WOVEN_PYTHON_SITE} YADE_PREFIX=${CMAKE_INSTALL_PREFIX}
                  OMP_WAIT_POLICY=passive ${Python3_EXECUTABLE} -m pytest -q ${CMAKE_CURRENT_SOURCE_DIR}/tests/python/test_native.py
          WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/tests/python)
+# The ABI test must be able to fail: the same sizes compiled without the Eigen alignment definitions
+# and YADE_MPI (State and Scene then differ) must be reported as a mismatch (exit 1).
+add_library(woven_abi_mismatch SHARED ${CMAKE_CURRENT_SOURCE_DIR}/pkg/yade/AbiSizes.cpp)
+set(_mismatch_defs ${WOVEN_YADE_DEFINES})
+list(REMOVE_ITEM _mismatch_defs EIGEN_DONT_VECTORIZE EIGEN_DONT_ALIGN EIGEN_DISABLE_UNALIGNED_ARRAY_ASSERT YADE_MPI)
+set_target_properties(woven_abi_mismatch PROPERTIES CXX_EXTENSIONS ON EXCLUDE_FROM_ALL ON)
+target_include_directories(woven_abi_mismatch PRIVATE ${YADE_SOURCE_DIR} ${Python3_INCLUDE_DIRS})
+target_compile_definitions(woven_abi_mismatch PRIVATE ${_mismatch_defs} BOOST_BIND_GLOBAL_PLACEHOLDERS BOOST_ALLOW_DEPRECATED_HEADERS)
+target_compile_options(woven_abi_mismatch PRIVATE -frounding-math -Wno-deprecated-declarations)
+target_link_libraries(woven_abi_mismatch PRIVATE Eigen3::Eigen)
+if(WOVEN_MPI_INCLUDE_DIR)
+  target_include_directories(woven_abi_mismatch SYSTEM PRIVATE ${WOVEN_MPI_INCLUDE_DIR})
+endif()
+add_test(NAME yade_abi_build_mismatch COMMAND ${CMAKE_COMMAND} --build ${CMAKE_BINARY_DIR} --target woven_abi_mismatch)
+add_test(NAME yade_abi_detects_mismatch
+         COMMAND ${CMAKE_COMMAND} -E env LD_PRELOAD=$<TARGET_FILE:woven_newprobe> YADE_PREFIX=${CMAKE_INSTALL_PREFIX}
+                 ${WOVEN_YADE_EXECUTABLE} -n -x ${CMAKE_CURRENT_SOURCE_DIR}/tests/yade/abi_sizes.py $<TARGET_FILE:woven_abi_mismatch>)
+set_tests_properties(yade_abi_detects_mismatch PROPERTIES DEPENDS yade_abi_build_mismatch
+                     PASS_REGULAR_EXPRESSION "abi_sizes: FAILED: .*State.*differ")

@@ -24,7 +24,9 @@ def loaded_plugin():
     return None
 
 
-path = loaded_plugin()
+# argv[1] (optional): a library with woven_yade_sizeof to check instead of the loaded plugin (the
+# CTest yade_abi_detects_mismatch gives one compiled without YADE's definitions: it must fail).
+path = sys.argv[1] if len(sys.argv) > 1 else loaded_plugin()
 if path is None:
     print('abi_sizes: FAILED TO RUN: libwoven_yade.so is not loaded (set YADE_PREFIX to the prefix the plugin is installed in)')
     sys.exit(2)
