@@ -65,6 +65,19 @@ void WovenFabricEngine::action()
 	}
 }
 
+WovenFabricEngine::~WovenFabricEngine()
+{
+	// An adopted fabric is held through its Python object (Boost.Python's deleter drops a reference):
+	// drop it with the GIL, and not at all once Python is finalized (a scene destroyed at exit).
+	if (!fabric) return;
+	if (Py_IsInitialized()) {
+		gilLock lock;
+		fabric.reset();
+	} else {
+		new std::shared_ptr<woven::FabricEngine>(std::move(fabric)); // leaked on purpose at exit
+	}
+}
+
 void WovenFabricEngine::adopt(const boost::python::object& engine)
 {
 	boost::python::extract<std::shared_ptr<woven::FabricEngine>> x(engine);

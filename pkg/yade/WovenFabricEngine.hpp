@@ -19,6 +19,7 @@ public:
 	std::shared_ptr<woven::FabricEngine> fabric; // the core's engine; shared with the woven.FabricEngine Python object
 
 	void action() override;
+	~WovenFabricEngine() override;
 	/// Takes the core engine of a woven.FabricEngine Python object (the same object, not a copy).
 	void adopt(const boost::python::object& engine);
 	/// The woven.FabricEngine Python object of the fabric (None before adopt or a load).
