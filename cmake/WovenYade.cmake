@@ -47,6 +47,13 @@ add_library(woven_core_native SHARED ${WOVEN_CORE_SOURCES})
 set_target_properties(woven_core_native PROPERTIES OUTPUT_NAME woven_core)
 target_include_directories(woven_core_native PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/pkg)
 target_link_libraries(woven_core_native PUBLIC Eigen3::Eigen OpenMP::OpenMP_CXX)
+# One id for this build's core library and Python module (pkg/engine/HostBridge.hpp, coreBuildId):
+# drawn once per build folder.
+if(NOT WOVEN_BUILD_ID)
+  string(RANDOM LENGTH 12 ALPHABET 0123456789abcdef _id)
+  set(WOVEN_BUILD_ID "native-${_id}" CACHE INTERNAL "id of this native build (core and _woven)")
+endif()
+target_compile_definitions(woven_core_native PRIVATE WOVEN_BUILD_ID="${WOVEN_BUILD_ID}")
 set(WOVEN_PY_CORE woven_core_native)
 
 # --- the plugin -----------------------------------------------------------------------------------

@@ -621,9 +621,14 @@ BOOST_PYTHON_MODULE(_woven) {
         const std::string b = engineSnapshot(e);
         return bp::object(bp::handle<>(PyBytes_FromStringAndSize(b.data(), static_cast<Py_ssize_t>(b.size()))));
       });
-  // Identity of the core library this module calls: the native YADE plugin's engine steps objects of
-  // this module only when both call the same shared core (py/woven/_native.py).
-  bp::def("_core_id", +[]() { return static_cast<long>(reinterpret_cast<std::uintptr_t>(&engineSnapshot)); });
+  // The build this module belongs to (a literal compiled here, so no other library can stand in for
+  // it): the native YADE plugin's engine steps objects of this module only when its core library
+  // reports the same id (py/woven/_native.py, pkg/engine/HostBridge.hpp).
+#ifdef WOVEN_BUILD_ID
+  bp::def("_build_id", +[]() { return std::string(WOVEN_BUILD_ID); });
+#else
+  bp::def("_build_id", +[]() { return std::string("default"); });
+#endif
   bp::def("_engine_from_snapshot", +[](bp::object bytes) {
     char* data = nullptr;
     Py_ssize_t n = 0;

@@ -45,6 +45,14 @@ void hostStep(FabricEngine& e, double dt, std::vector<HostBody>& bodies, bool re
   }
 }
 
+const char* coreBuildId() {
+#ifdef WOVEN_BUILD_ID
+  return WOVEN_BUILD_ID;
+#else
+  return "static";
+#endif
+}
+
 long hostNodes(const FabricEngine& e) { return static_cast<long>(e.fabric().nNodes()); }
 
 void hostTubes(const FabricEngine& e, HostTubes& out) {

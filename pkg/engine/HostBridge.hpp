@@ -42,6 +42,12 @@ struct HostTubes {
 };
 void hostTubes(const FabricEngine& e, HostTubes& out);
 
+/// Identity of this core library's build: the native build's CMake gives the core and the Python
+/// module one random id (WOVEN_BUILD_ID); the plugin compares it with woven._woven._build_id(), a
+/// literal compiled into the module itself, so a module of another build is never driven by the
+/// plugin (py/woven/_native.py). "static" for a core built without an id.
+const char* coreBuildId();
+
 // pkg/engine/Snapshot.hpp, declared here for hosts that do not include woven's classes.
 std::string engineSnapshot(FabricEngine& e);
 std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes);

@@ -93,7 +93,7 @@ boost::python::object WovenFabricEngine::pyFabric()
 	return boost::python::object(fabric);
 }
 
-long WovenFabricEngine::coreId() const { return static_cast<long>(reinterpret_cast<std::uintptr_t>(&woven::engineSnapshot)); }
+std::string WovenFabricEngine::coreBuild() const { return woven::coreBuildId(); }
 
 long WovenFabricEngine::nodes() const { return fabric ? woven::hostNodes(*fabric) : 0; }
 

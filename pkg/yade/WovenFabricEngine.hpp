@@ -25,9 +25,9 @@ public:
 	/// The woven.FabricEngine Python object of the fabric (None before adopt or a load).
 	boost::python::object pyFabric();
 	long nodes() const;
-	/// Address of a function of the core library this plugin calls (woven._native compares it with
-	/// woven._woven._core_id(): equal only when both use one shared core).
-	long coreId() const;
+	/// Build id of the core library this plugin calls (woven._native compares it with
+	/// woven._woven._build_id(): equal only for the package of the same native build).
+	std::string coreBuild() const;
 
 	std::vector<woven::HostBody> bodies_; // coupled bodies of the step (scratch)
 
@@ -48,7 +48,7 @@ public:
 		.def("adopt", &WovenFabricEngine::adopt, (boost::python::arg("engine")), "Takes the fabric of a woven.FabricEngine (the same object: the script keeps using it).")
 		.add_property("fabric", &WovenFabricEngine::pyFabric, "The woven.FabricEngine this engine steps (None before adopt).")
 		.add_property("nodes", &WovenFabricEngine::nodes, "Yarn nodes of the fabric (0 before adopt).")
-		.add_property("coreId", &WovenFabricEngine::coreId, "Identity of the woven core library the plugin calls (woven._native checks that woven._woven calls the same).")
+		.add_property("coreBuild", &WovenFabricEngine::coreBuild, "Build id of the woven core library the plugin calls (woven._native checks that woven._woven is of the same build).")
 	);
 	// clang-format on
 };

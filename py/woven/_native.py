@@ -5,8 +5,9 @@ yade.wrapper.WovenFabricEngine is a GlobalEngine that steps the very woven.Fabri
 (the plugin and woven._woven share one core library), so no Python runs in the loop and O.save /
 O.load keep the whole fabric. woven.attach uses it when:
   - yade.wrapper has WovenFabricEngine (the plugin is loaded), and
-  - woven._woven was built against the same core library (_woven._core_id() equals the plugin's
-    WovenFabricEngine.coreId: a default-build _woven has its own core, of another layout), and
+  - woven._woven is of the same native build as the plugin (_woven._build_id(), a literal in the
+    module, equals the plugin's WovenFabricEngine.coreBuild, the id of the core library it calls; a
+    default-build module says 'default'), and
   - WOVEN_NATIVE is not '0' in the environment (WOVEN_NATIVE=0 forces the PyRunner adapter).
 WOVEN_NATIVE=1 makes a missing or mismatched plugin an error instead of a silent fallback.
 """
@@ -22,10 +23,11 @@ def why_not():
     if not hasattr(yade.wrapper, 'WovenFabricEngine'):
         return ('yade.wrapper has no WovenFabricEngine: the plugin libwoven_yade.so is not loaded (build with '
                 '-DYADE_SOURCE_DIR=..., install, and run yade with YADE_PREFIX set to its prefix; docs/yade_native.md)')
-    core = getattr(_woven, '_core_id', None)
-    if core is None or core() != yade.wrapper.WovenFabricEngine().coreId:
-        return ('woven._woven and the plugin do not share one core library (a default-build woven package with the '
-                'native plugin): install both from the same -DYADE_SOURCE_DIR build')
+    build = getattr(_woven, '_build_id', None)
+    mine, plugin = (build() if build else 'unknown'), yade.wrapper.WovenFabricEngine().coreBuild
+    if mine != plugin:
+        return ('woven._woven (build %s) is not of the plugin\'s build (%s): put the woven package of the same '
+                '-DYADE_SOURCE_DIR build on PYTHONPATH (a default-build package runs with the PyRunner)' % (mine, plugin))
     return ''
 
 
