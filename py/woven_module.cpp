@@ -6,6 +6,7 @@
 #include "core/Errors.hpp"
 #include "core/Parallel.hpp"
 #include "engine/FabricEngine.hpp"
+#include "engine/Snapshot.hpp"
 #include "geom/SeparatingAxis.hpp"
 #include "weave/WeaveBuilder.hpp"
 #include <memory>
@@ -612,5 +613,26 @@ BOOST_PYTHON_MODULE(_woven) {
       })
       .def("_section_dirs", +[](FabricEngine& e) { return bytesOf(e.fabric().secDir); })
       .def("_section_flattening", +[](FabricEngine& e) { return bytesOf(e.fabric().secFlat); })
-      .def("_section_semi_axes", &semiAxesPy);
+      .def("_section_semi_axes", &semiAxesPy)
+      // The whole engine as bytes (pkg/engine/Snapshot.hpp; the native YADE plugin's O.save format);
+      // forgets the carried contacts as save_state does.
+      .def("_same", +[](FabricEngine& a, FabricEngine& b) { return &a == &b; }, (bp::arg("other")))
+      .def("_snapshot", +[](FabricEngine& e) {
+        const std::string b = engineSnapshot(e);
+        return bp::object(bp::handle<>(PyBytes_FromStringAndSize(b.data(), static_cast<Py_ssize_t>(b.size()))));
+      });
+  // The build this module belongs to (a literal compiled here, so no other library can stand in for
+  // it): the native YADE plugin's engine steps objects of this module only when its core library
+  // reports the same id (py/woven/_native.py, pkg/engine/HostBridge.hpp).
+#ifdef WOVEN_BUILD_ID
+  bp::def("_build_id", +[]() { return std::string(WOVEN_BUILD_ID); });
+#else
+  bp::def("_build_id", +[]() { return std::string("default"); });
+#endif
+  bp::def("_engine_from_snapshot", +[](bp::object bytes) {
+    char* data = nullptr;
+    Py_ssize_t n = 0;
+    if (PyBytes_AsStringAndSize(bytes.ptr(), &data, &n) != 0) bp::throw_error_already_set();
+    return restoreSnapshot(std::string(data, static_cast<std::size_t>(n)));
+  }, (bp::arg("snapshot")), "A FabricEngine rebuilt from FabricEngine._snapshot() bytes, continuing bit for bit.");
 }

@@ -2,7 +2,9 @@
 #   yade -n -x scripts/bench_pyrunner.py [nodes=1000] [iters=20000] [out=DIR]
 # Prints microseconds per iteration for: an empty YADE loop, a PyRunner doing nothing, the woven
 # adapter (PyRunner + C++ step), and the bare C++ step (FabricEngine.run); the adapter's overhead is
-# adapter - bare step, independent of the fabric size.
+# adapter - bare step, independent of the fabric size. With the native YADE plugin loaded
+# (docs/yade_native.md) it also times the plugin's WovenFabricEngine stepping the same chain
+# (native_engine_us; its overhead native - bare step), and woven.attach's choice is the native one.
 import sys
 import time
 
@@ -40,16 +42,36 @@ noop = per_iter([PyRunner(command='pass', iterPeriod=1)])
 O.reset()
 O.engines = []
 e = chain()
+from woven import _native
+# The PyRunner adapter, whichever build this is (WOVEN_NATIVE=0 makes attach take it).
+import os
+os.environ['WOVEN_NATIVE'], saved = '0', os.environ.get('WOVEN_NATIVE')
 woven.attach(e)
+if saved is None:
+    del os.environ['WOVEN_NATIVE']
+else:
+    os.environ['WOVEN_NATIVE'] = saved
 t = time.perf_counter()
 O.run(p.iters, True)
 adapter = (time.perf_counter() - t) / p.iters * 1e6
+native = None
+if not _native.why_not():
+    O.reset()
+    O.engines = []
+    en = chain()
+    O.engines = [_native.make(en, rewind=False)]
+    O.dt = 0.7 * en.dt_crit
+    t = time.perf_counter()
+    O.run(p.iters, True)
+    native = (time.perf_counter() - t) / p.iters * 1e6
 e2 = chain()
 t = time.perf_counter()
 e2.run(0.9 * e2.dt_crit, p.iters)
 bare = (time.perf_counter() - t) / p.iters * 1e6
 res = {'empty_loop_us': empty, 'pyrunner_noop_us': noop, 'woven_adapter_us': adapter, 'bare_cpp_step_us': bare,
        'adapter_overhead_us': adapter - bare, 'bare_node_steps_per_s': p.nodes / (bare * 1e-6)}
+if native is not None:  # the plugin's engine: its cost beyond the bare step and YADE's empty loop
+    res.update({'native_engine_us': native, 'native_overhead_us': native - bare - empty})
 for k, v in res.items():
     print('bench_pyrunner: %-24s %12.3f' % (k, v))
 write_summary(d, 'bench_pyrunner', p, res, {'pyrunner_cost_us_quoted': 30.0},

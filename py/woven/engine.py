@@ -13,6 +13,7 @@ with the fabric on the same (x_n, v_{n+1/2}) as the yarns, and moves them with t
 import yade.wrapper
 
 from ._woven import FabricEngine
+from . import _native  # the native YADE plugin's engine, when installed (docs/yade_native.md)
 
 _O = yade.wrapper.Omega()
 _registry = {}
@@ -35,7 +36,9 @@ def _step(key):
 
 
 def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
-    """Puts `engine` (a woven.FabricEngine) into O.engines and returns the PyRunner that drives it.
+    """Puts `engine` (a woven.FabricEngine) into O.engines and returns the PyRunner that drives it,
+    or, with the native YADE plugin installed, the yade.wrapper.WovenFabricEngine that steps it
+    (woven._native; WOVEN_NATIVE=0 forces the PyRunner).
 
     set_dt: set O.dt = safety * engine.dt_crit [s] (safety in (0, 1]; 0.7 by default because slack/taut
             switching of tension-only yarns gains energy near dt_crit, docs/design.md); otherwise O.dt must already
@@ -58,6 +61,10 @@ def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
         raise ValueError('dt = %.12g is invalid: allowed (0, dt_crit = %.12g] s (stable limit of the chain; '
                          'set O.dt below it or attach(..., set_dt=True))' % (_O.dt, engine.dt_crit))
     # The same engine twice would step the fabric twice per YADE iteration (with YADE's O.dt each).
+    native = _native.wanted()
+    if native and _native.attached(engine, _O.engines) is not None:
+        raise ValueError('engine = %r is invalid: allowed an engine not attached yet (it is already in '
+                         'O.engines as a WovenFabricEngine; attach each engine once)' % (engine,))
     for e in _O.engines:
         if isinstance(e, yade.wrapper.PyRunner) and e.command.startswith('_woven_step('):
             try:
@@ -67,11 +74,16 @@ def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
             if k in _registry and _registry[k][0] is engine:
                 raise ValueError('engine = %r is invalid: allowed an engine not attached yet (it is already in '
                                  'O.engines as %r; attach each engine once)' % (engine, e.command))
-    key = len(_registry)
     # Bodies coupled to the fabric (woven.coupling) were already moved over this iteration's step
     # when a NewtonIntegrator runs before the adapter: the step rewinds them to x_n first.
     newton = [i for i, e in enumerate(_O.engines) if isinstance(e, yade.wrapper.NewtonIntegrator) and not e.dead]
     rewind = bool(newton) and append
+    if native:  # the plugin's GlobalEngine: the same step in C++, no Python per iteration
+        runner = _native.make(engine, rewind, label)
+        if append:
+            _O.engines = list(_O.engines) + [runner]
+        return runner
+    key = len(_registry)
     _registry[key] = (engine, rewind)
     # PyRunner compiles its command every iteration: keep it short (a name put into __main__, where
     # YADE runs PyRunner commands, and a small key): measured 60-70 -> 40-45 us per iteration.

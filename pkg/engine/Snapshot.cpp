@@ -1,0 +1,212 @@
+#include "engine/Snapshot.hpp"
+#include "core/Errors.hpp"
+#include <cmath>
+#include <cstring>
+
+namespace woven {
+
+namespace {
+
+constexpr char kMagic[8] = {'W', 'O', 'V', 'E', 'N', 'S', 'N', '1'};
+
+std::uint64_t fnv64(const char* p, std::size_t n) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * 1099511628211ull;
+  return h;
+}
+
+struct Out {
+  std::string b;
+  template <class T>
+  void put(const T& v) { b.append(reinterpret_cast<const char*>(&v), sizeof(T)); }
+  template <class T>
+  void vec(const std::vector<T>& a) {
+    put(static_cast<std::uint64_t>(a.size()));
+    if (!a.empty()) b.append(reinterpret_cast<const char*>(a.data()), a.size() * sizeof(T));
+  }
+};
+
+struct In {
+  const std::string& b;
+  std::size_t at = 0;
+  [[noreturn]] static void fail(const std::string& what) {
+    throw ParameterError("snapshot", what, "bytes written by woven::engineSnapshot (format WOVENSN1)");
+  }
+  void need(std::size_t n) const {
+    if (n > b.size() - at) fail("truncated bytes");
+  }
+  template <class T>
+  T get() {
+    T v;
+    need(sizeof(T));
+    std::memcpy(&v, b.data() + at, sizeof(T));
+    at += sizeof(T);
+    return v;
+  }
+  template <class T>
+  void vec(std::vector<T>& a) {
+    const auto n = get<std::uint64_t>();
+    if (n > (b.size() - at) / sizeof(T)) fail("truncated bytes");
+    a.resize(n);
+    if (n) std::memcpy(a.data(), b.data() + at, n * sizeof(T));
+    at += n * sizeof(T);
+  }
+};
+
+// Plain structs go as their bytes (trivially copyable, same build): checked at compile time.
+static_assert(std::is_trivially_copyable<Yarn>::value && std::is_trivially_copyable<YarnMaterial>::value &&
+                  std::is_trivially_copyable<ContactParams>::value &&
+                  std::is_trivially_copyable<BreakageParams>::value && std::is_trivially_copyable<EnergyBooks>::value &&
+                  std::is_trivially_copyable<InstabilityLimits>::value,
+              "snapshot: a plain struct is no longer trivially copyable");
+
+void putBreakEvents(Out& o, const std::vector<BreakEvent>& log) {
+  o.put(static_cast<std::uint64_t>(log.size()));
+  for (const BreakEvent& ev : log) {
+    o.put(static_cast<std::int64_t>(ev.step)), o.put(ev.time), o.put(ev.yarn), o.put(ev.element);
+    o.put(ev.position), o.put(ev.strain), o.put(ev.rawStrain), o.put(ev.energy);
+  }
+}
+
+void getBreakEvents(In& in, std::vector<BreakEvent>& log) {
+  const auto n = in.get<std::uint64_t>();
+  if (n > in.b.size()) In::fail("truncated bytes");
+  log.resize(n);
+  for (BreakEvent& ev : log) {
+    ev.step = static_cast<long>(in.get<std::int64_t>()), ev.time = in.get<Real>(), ev.yarn = in.get<Index>();
+    ev.element = in.get<Index>(), ev.position = in.get<Vec3>(), ev.strain = in.get<Real>();
+    ev.rawStrain = in.get<Real>(), ev.energy = in.get<Real>();
+  }
+}
+
+}  // namespace
+
+std::string engineSnapshot(FabricEngine& e) {
+  const Fabric& f = e.fabric();
+  const ChainDynamics& d = e.dynamics();
+  Out o;
+  o.b.append(kMagic, 8);
+  // Fabric: every array (forces, strains and tensions are recomputed on restore).
+  o.vec(f.pos), o.vec(f.vel), o.vec(f.mass), o.vec(f.invMass), o.vec(f.nodeYarn);
+  o.vec(f.secRadius), o.vec(f.secFlat), o.vec(f.secDir);
+  o.vec(f.elem0), o.vec(f.restLength), o.vec(f.stiffness), o.vec(f.damping), o.vec(f.alive), o.vec(f.elemYarn);
+  o.vec(f.yarns), o.vec(f.materials);
+  // Loads and limits.
+  const Loads& L = d.loads();
+  o.put(L.bodyAcceleration), o.vec(L.kinematicNodes), o.vec(L.kinematicVelocity), o.put(L.velocityRamp);
+  o.vec(L.forceNodes), o.vec(L.forceValues);
+  o.put(d.limits);
+  // Collision stage: settings and bodies.
+  const CollisionStage* st = e.collisions();
+  o.put(std::uint8_t(st != nullptr));
+  if (st) {
+    o.put(st->params()), o.put(st->broadPhase), o.put(st->bodyCollider.skin), o.put(st->tree.rebuildRatio);
+    o.put(static_cast<std::uint64_t>(st->bodies.size()));
+    for (const RigidBody& b : st->bodies) {
+      o.put(static_cast<std::int64_t>(b.id)), o.put(static_cast<std::uint64_t>(b.parts.size()));
+      for (const RigidPart& q : b.parts)
+        o.put(q.type), o.put(q.halfSize), o.put(q.radius), o.put(q.offset), o.put(q.ori.coeffs().eval());
+      o.put(b.mass), o.put(b.inertia), o.put(b.pos);
+      o.put(b.ori.coeffs().eval()), o.put(b.vel), o.put(b.angVel);
+    }
+  }
+  // State (FabricEngine::state: what setState puts back).
+  const KinematicState s = e.state();
+  o.put(static_cast<std::int64_t>(s.step)), o.put(s.time), o.put(s.lastDt), o.put(s.topology);
+  o.put(static_cast<std::int64_t>(s.yarns));
+  o.put(std::uint8_t(s.booksStarted)), o.put(std::uint8_t(s.springSeen)), o.put(s.books);
+  o.put(s.breakage.params), o.vec(s.breakage.strength), o.vec(s.breakage.filtered);
+  putBreakEvents(o, s.breakage.log);
+  o.put(fnv64(o.b.data(), o.b.size()));
+  // As saveState: both this run and the restored one test every pair at their next step.
+  if (CollisionStage* c = e.collisions()) c->invalidateCache();
+  return o.b;
+}
+
+std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
+  if (bytes.size() < 16 || std::memcmp(bytes.data(), kMagic, 8) != 0) In::fail("no WOVENSN1 header");
+  std::uint64_t sum;
+  std::memcpy(&sum, bytes.data() + bytes.size() - 8, 8);
+  if (sum != fnv64(bytes.data(), bytes.size() - 8)) In::fail("checksum mismatch");
+  const std::string body = bytes.substr(0, bytes.size() - 8);
+  In in{body, 8};
+  Fabric f;
+  in.vec(f.pos), in.vec(f.vel), in.vec(f.mass), in.vec(f.invMass), in.vec(f.nodeYarn);
+  in.vec(f.secRadius), in.vec(f.secFlat), in.vec(f.secDir);
+  in.vec(f.elem0), in.vec(f.restLength), in.vec(f.stiffness), in.vec(f.damping), in.vec(f.alive), in.vec(f.elemYarn);
+  in.vec(f.yarns), in.vec(f.materials);
+  const std::size_t n = f.pos.size(), ne = f.elem0.size();
+  if (f.vel.size() != n || f.mass.size() != n || f.invMass.size() != n || f.nodeYarn.size() != n ||
+      f.secRadius.size() != n || f.secFlat.size() != n || f.secDir.size() != n || f.restLength.size() != ne ||
+      f.stiffness.size() != ne || f.damping.size() != ne || f.alive.size() != ne || f.elemYarn.size() != ne)
+    In::fail("inconsistent array sizes");
+  for (const Yarn& y : f.yarns)
+    if (y.material < 0 || static_cast<std::size_t>(y.material) >= f.materials.size() || y.firstNode < 0 ||
+        y.firstElem < 0 || static_cast<std::size_t>(y.firstNode) + y.nNodes > n ||
+        static_cast<std::size_t>(y.firstElem) + y.nElems > ne)
+      In::fail("a yarn outside the arrays");
+  for (std::size_t e = 0; e < ne; ++e)
+    if (f.elemYarn[e] < 0 || static_cast<std::size_t>(f.elemYarn[e]) >= f.yarns.size() || f.elem0[e] < 0 ||
+        static_cast<std::size_t>(f.elem0[e]) + 1 >= n)
+      In::fail("an element outside the arrays");
+  KinematicState s;
+  s.pos = f.pos, s.vel = f.vel, s.flat = f.secFlat, s.dir = f.secDir;
+  s.alive = f.alive, s.stiffness = f.stiffness, s.damping = f.damping;
+  // The elements as built (addYarn's formulas, as setState uses): the critical step is the one of
+  // the built weave, as in the engine that wrote the snapshot; setState then puts the breaks back.
+  f.strain.assign(ne, 0.0), f.tension.assign(ne, 0.0), f.force.assign(n, Vec3::Zero());
+  for (std::size_t e = 0; e < ne; ++e) {
+    const YarnMaterial& m = f.materials[f.yarns[f.elemYarn[e]].material];
+    const Real K = m.E * m.area / f.restLength[e], me = m.rho * m.area * f.restLength[e];
+    f.alive[e] = 1, f.stiffness[e] = K, f.damping[e] = m.dampingRatio * std::sqrt(K * me);
+  }
+  Loads L;
+  L.bodyAcceleration = in.get<Vec3>(), in.vec(L.kinematicNodes), in.vec(L.kinematicVelocity);
+  L.velocityRamp = in.get<Real>(), in.vec(L.forceNodes), in.vec(L.forceValues);
+  if (L.kinematicVelocity.size() != L.kinematicNodes.size() || L.forceValues.size() != L.forceNodes.size())
+    In::fail("inconsistent loads");
+  const auto limits = in.get<InstabilityLimits>();
+  auto e = std::make_shared<FabricEngine>(std::move(f));
+  ChainDynamics& d = e->dynamics();
+  d.limits = limits;
+  for (std::size_t k = 0; k < L.kinematicNodes.size(); ++k) d.prescribeVelocity(L.kinematicNodes[k], L.kinematicVelocity[k]);
+  d.setVelocityRamp(L.velocityRamp);
+  d.setBodyAcceleration(L.bodyAcceleration);
+  for (std::size_t k = 0; k < L.forceNodes.size(); ++k) d.setPointForce(L.forceNodes[k], L.forceValues[k]);
+  if (in.get<std::uint8_t>()) {
+    const auto p = in.get<ContactParams>();
+    const auto broad = in.get<BroadPhase>();
+    e->enableCollisions(p, broad);
+    CollisionStage& st = *e->collisions();
+    st.bodyCollider.skin = in.get<Real>(), st.tree.rebuildRatio = in.get<Real>();
+    const auto nb = in.get<std::uint64_t>();
+    if (nb > in.b.size()) In::fail("truncated bytes");
+    for (std::uint64_t k = 0; k < nb; ++k) {
+      RigidBody b;
+      b.id = static_cast<long>(in.get<std::int64_t>());
+      const auto np = in.get<std::uint64_t>();
+      if (np > in.b.size()) In::fail("truncated bytes");
+      b.parts.resize(np);
+      for (RigidPart& q : b.parts) {
+        q.type = in.get<RigidPart::Type>(), q.halfSize = in.get<Vec3>(), q.radius = in.get<Real>();
+        q.offset = in.get<Vec3>(), q.ori.coeffs() = in.get<Eigen::Matrix<Real, 4, 1>>();
+      }
+      b.mass = in.get<Real>();
+      b.inertia = in.get<Vec3>(), b.pos = in.get<Vec3>(), b.ori.coeffs() = in.get<Eigen::Matrix<Real, 4, 1>>();
+      b.vel = in.get<Vec3>(), b.angVel = in.get<Vec3>();
+      b.validate();
+      st.bodies.push_back(b);
+    }
+  }
+  s.step = static_cast<long>(in.get<std::int64_t>()), s.time = in.get<Real>(), s.lastDt = in.get<Real>();
+  s.topology = in.get<std::uint64_t>(), s.yarns = static_cast<long>(in.get<std::int64_t>());
+  s.booksStarted = in.get<std::uint8_t>() != 0, s.springSeen = in.get<std::uint8_t>() != 0;
+  s.books = in.get<EnergyBooks>();
+  s.breakage.params = in.get<BreakageParams>(), in.vec(s.breakage.strength), in.vec(s.breakage.filtered);
+  getBreakEvents(in, s.breakage.log);
+  if (in.at != in.b.size()) In::fail("trailing bytes");
+  e->setState(s);  // checks everything (topology fingerprint, ranges) and puts clock, books, breaks back
+  return e;
+}
+
+}  // namespace woven

@@ -1,0 +1,181 @@
+"""The native YADE plugin (docs/yade_native.md): woven.attach puts yade.wrapper.WovenFabricEngine into
+O.engines, the scenes give the same bits as with the PyRunner adapter (and as the default build when
+WOVEN_DEFAULT_SITE names its installed package folder), and O.save / O.load continue bit for bit.
+
+Skipped unless the plugin is built and loaded: configure with -DYADE_SOURCE_DIR=<YADE's source>,
+`cmake --install`, `bash scripts/yade_prefix.sh <prefix>`, and run pytest with YADE_PREFIX=<prefix>
+and PYTHONPATH=<the native build's package folder> (README, "Native YADE plugin")."""
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+
+import woven  # noqa: E402  (imports yade)
+from woven import _native  # noqa: E402
+
+REASON = _native.why_not()
+pytestmark = pytest.mark.skipif(bool(REASON), reason='native YADE plugin not in use (enable: cmake -DYADE_SOURCE_DIR=<YADE '
+                                'source>, install, YADE_PREFIX=<prefix>; docs/yade_native.md): ' + REASON)
+
+# Keys of summary.json that are wall-clock times (they differ run to run in any build).
+TIMING = ('seconds', 'wall', 'time_s', 'per_s', 'elapsed', 'speed', '_us')
+
+
+def _numbers(d, prefix=''):
+    """Flattened {key: value} of the numbers and strings in a summary, without timings."""
+    out = {}
+    for k, v in d.items():
+        key = prefix + k
+        if any(t in k for t in TIMING) or (isinstance(v, str) and v.startswith('/')):
+            continue  # wall-clock times and output paths differ run to run
+        if isinstance(v, dict):
+            out.update(_numbers(v, key + '.'))
+        elif isinstance(v, (int, float, str, bool)) or v is None:
+            out[key] = v
+        elif isinstance(v, list):
+            out[key] = json.dumps(v)
+    return out
+
+
+def _scene(script, out, args, native, site=None):
+    """Runs a scene in yade; native: WOVEN_NATIVE=1 (must use the plugin) or 0 (PyRunner)."""
+    env = dict(os.environ, WOVEN_NATIVE='1' if native else '0', OMP_NUM_THREADS='1')
+    if site:  # the default build: its package, Debian's YADE without the plugin
+        env['PYTHONPATH'] = site
+        env.pop('YADE_PREFIX', None)
+        env.pop('WOVEN_NATIVE')
+    os.makedirs(out, exist_ok=True)
+    cmd = ['yade', '-n', '-x', os.path.join(ROOT, 'scripts', script), 'out=%s' % out] + list(args)
+    r = subprocess.run(cmd, cwd=str(out), capture_output=True, text=True, timeout=900, env=env)
+    assert r.returncode == 0, r.stdout + r.stderr
+    s = json.load(open(os.path.join(str(out), 'summary.json')))
+    files = {}
+    for name in sorted(os.listdir(str(out))):
+        if name.endswith(('.csv', '.state')) and 'bench' not in name:
+            files[name] = open(os.path.join(str(out), name), 'rb').read()
+    return s, files
+
+
+SCENES = {
+    'smith': ('smith.py', ['elements=1000', 'levels=1', 'duration=0.5']),
+    'tension': ('tension.py', ['nx=3', 'ny=3', 'samples=20']),
+    'ballistic': ('ballistic.py', ['side=0.004', 't_end=3e-6', 'vtk_every=-1', 'progress=0', 'samples=20']),
+}
+
+
+@pytest.mark.parametrize('name', sorted(SCENES))
+def test_scene_same_bits_native_and_pyrunner(name, tmp_path):
+    script, args = SCENES[name]
+    a, fa = _scene(script, tmp_path / 'native', args, native=True)
+    b, fb = _scene(script, tmp_path / 'pyrunner', args, native=False)
+    na, nb = _numbers(a['measured']), _numbers(b['measured'])
+    assert na == nb  # every measured figure, to the last bit (json keeps doubles exactly)
+    assert fa.keys() == fb.keys() and fa == fb  # time series and state files byte for byte
+    assert len(na) > 3
+    site = os.environ.get('WOVEN_DEFAULT_SITE')
+    if site:  # the default build (static core, Eigen aligned): the same bits too
+        c, fc = _scene(script, tmp_path / 'default', args, native=False, site=site)
+        assert _numbers(c['measured']) == na
+        assert fc == fa
+
+
+def test_attach_puts_the_native_engine(yade_ns):
+    O = yade_ns.O
+    O.reset()
+    O.engines = []
+    w = woven.weave(nx=1, ny=1)
+    n = woven.attach(w.engine)
+    assert type(n).__name__ == 'WovenFabricEngine' and n.fabric._same(w.engine)
+    assert [type(e).__name__ for e in O.engines] == ['WovenFabricEngine']
+    with pytest.raises(ValueError, match='already in O.engines'):
+        woven.attach(w.engine)
+    O.run(5, True)
+    assert w.engine.iter == 5 and O.iter == 5
+
+
+def _struck_ply(yade_ns):
+    """A 6 x 6-yarn ply clamped at its yarn ends, a YADE Box at 300 m/s just above it, coupled, with
+    breakage: contacts, impulses on the body and the yarns' strain filter all carry over a save."""
+    O = yade_ns.O
+    O.reset()
+    O.engines = [yade_ns.wrapper.ForceResetter(), yade_ns.wrapper.NewtonIntegrator(damping=0)]
+    w = woven.weave(nx=3, ny=3, cp_per_span=2)
+    e = w.engine
+    woven.contact.enable(e)
+    e.enable_breakage(strain=0.02)
+    for y in range(e.n_yarns):
+        info = e.yarn(y)
+        e.fix(info['first_node'])
+        e.fix(info['first_node'] + info['n_nodes'] - 1)
+    X = woven.positions(e)
+    c = 0.5 * (X.min(axis=0) + X.max(axis=0))
+    half = 0.8e-3
+    pid = O.bodies.append(yade_ns.utils.box(yade_ns.Vector3(c[0], c[1], X[:, 2].max() + half + 0.3e-3),
+                                            yade_ns.Vector3(half, half, half), fixed=False))
+    O.bodies[pid].state.vel = yade_ns.Vector3(0, 0, -300)
+    O.bodies[pid].state.angVel = yade_ns.Vector3(0, 1e3, 0)
+    woven.coupling.couple(e, [pid])
+    n = woven.attach(e)
+    return e, pid, n
+
+
+def _fingerprint(O, e, pid):
+    s = O.bodies[pid].state
+    return (woven.positions(e).tobytes(), woven.velocities(e).tobytes(), woven.alive(e).tobytes(),
+            woven.section_flattening(e).tobytes(), repr(e.energy()), repr((tuple(s.pos), tuple(s.vel),
+                                                                        tuple(s.ori), tuple(s.angVel))), e.iter)
+
+
+@pytest.mark.parametrize('ext', ['.yade.gz', '.xml', '.yade.bz2'])
+def test_save_load_continues_bit_for_bit(yade_ns, tmp_path, ext):
+    O = yade_ns.O
+    e, pid, n = _struck_ply(yade_ns)
+    O.run(60, True)
+    path = str(tmp_path / ('scene' + ext))
+    O.save(path)
+    O.run(120, True)
+    ref = _fingerprint(O, e, pid)
+    assert e.collision_stats()['contacts'] > 0 or len(e.break_log()) > 0  # the body reached the ply
+    O.load(path)
+    assert O.iter == 60
+    e2 = O.engines[-1].fabric
+    assert type(O.engines[-1]).__name__ == 'WovenFabricEngine' and e2.iter == 60 and not e2._same(e)
+    O.run(120, True)
+    assert _fingerprint(O, e2, pid) == ref
+
+
+def test_snapshot_round_trip_in_memory(yade_ns):
+    """O.saveTmp / O.loadTmp (binary archive in memory) keep the fabric too."""
+    O = yade_ns.O
+    e, pid, n = _struck_ply(yade_ns)
+    O.run(30, True)
+    O.saveTmp('woven')
+    O.run(50, True)
+    ref = _fingerprint(O, e, pid)
+    O.loadTmp('woven')
+    O.run(50, True)
+    assert _fingerprint(O, O.engines[-1].fabric, pid) == ref
+
+
+def test_instability_sets_last_error_as_the_pyrunner(yade_ns):
+    O = yade_ns.O
+    O.reset()
+    O.engines = []
+    f = woven.Fabric()
+    f.add_yarn([yade_ns.Vector3(1e-3 * i, 0, 0) for i in range(51)], woven.YarnMaterial(), woven.YarnSection())
+    e = woven.FabricEngine(f)
+    woven.attach(e)
+    e.fix(0)
+    e.fix(50)
+    for i in range(1, 50):
+        e.set_vel(i, yade_ns.Vector3(0, np.sin(np.pi * i / 50), 0))
+    e.blowup_factor = 0.25
+    with pytest.raises(RuntimeError, match='unstable at step'):
+        O.run(100, True)
+    err = woven.engine.last_error
+    assert isinstance(err, woven.InstabilityError) and err.step > 0 and 'energy blow-up' in err.cause
+    assert 'unstable' in O.engines[-1].lastError
