@@ -332,10 +332,12 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
             BodyContact out[2], const Vec3Array* tangent, const BodyContact* held) {
   const Index i = f.elem0[cp];
   // Listed when it can touch within the step: a speculative contact (Box2D), whose row lets the pair
-  // close exactly its gap.
-  const auto listed = [&](const BodyContact& c, const Vec3& vCP) {
-    const Real vn = (body.velocityAt(c.point) - vCP).dot(c.normal);
-    return c.gap <= margin + std::max(Real(0), -vn) * dt;
+  // close exactly its gap. The approach is bounded by the speeds, not by the normal velocity now: a
+  // CP whipping at 1500 m/s past a sphere turns its closest point and normal within the step (at 4
+  // CPs per span such contacts were found 15-40 um deep at the next step).
+  const Real nodeSpeed = std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm()));
+  const auto listed = [&](const BodyContact& c) {
+    return c.gap <= margin + (body.velocityAt(c.point).norm() + nodeSpeed) * dt;
   };
   BodyContact c;
   c.cp = cp, c.part = part, c.gapModel = true, c.time = 0;
@@ -351,7 +353,7 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
     else k.secA = q.b;
     k.gap = sphereGapAt(f.pos[i], f.pos[i + 1], centre, body.parts[part].radius, k, k.s, k.normal, k.point);
     if (c.gap < std::min(k.gap, Real(0))) c = k;
-    if (!listed(c, (1 - c.s) * f.vel[i] + c.s * f.vel[i + 1])) return 0;
+    if (!listed(c)) return 0;
     out[0] = c;
     return 1;
   }
@@ -386,7 +388,7 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
     // On the line through the node along n (the support is held: the arm of the body's row is then
     // exactly the gradient of g in the body's rotation).
     c.point = f.pos[i + k] + c.support[k] * c.normal;
-    if (listed(c, f.vel[i + k])) out[count++] = c;
+    if (listed(c)) out[count++] = c;
   }
   return count;
 }

@@ -89,8 +89,8 @@ void capMeasure(CPContact& c, Real remembered);
 void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections, const Vec3Array* tangent = nullptr);
 
 /// CP-body contacts of the gap model in out[] (the sphere form: 1; the box form: one per end section
-/// that can touch), each listed when g <= margin + the approach within dt (relative normal velocity
-/// of the two points: a speculative contact, whose row lets the pair close exactly its gap).
+/// that can touch), each listed when g <= margin + dt (the body's speed at the point + the CP's
+/// fastest node): a speculative contact, whose row lets the pair close exactly its gap.
 /// `held` (may be null) is the same CP and part's contact of the last step: the sections' measure
 /// may grow only into room (capMeasure's rule; without one, the half-thickness is the reference).
 /// Returns the count.
