@@ -182,27 +182,30 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
       // Two points at the ends of the shared part carry a line contact's force and moment; a short
       // shared part (the pieces meet end to end) is one point.
       const int n = hi - lo > 1e-3 ? 2 : 1;
-      Real at[2] = {n == 2 ? lo : 0.5 * (lo + hi), hi};
-      if (n == 2) {
-        // Skew pieces whose axes come closest inside the shared part (an X at a small angle): the
-        // ends do not see that approach, so the closest point takes the place of the farther end
-        // (where the axes are parallel to within kSideSkew the ends hold the line, as above).
-        const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
-        if (sc.s > lo && sc.s < hi) {
-          const auto distanceAt = [&](Real s) {
-            const Vec3 p = (1 - s) * f.pos[i] + s * f.pos[i + 1];
-            const Real t = alongCP(f, b, p);
-            return ((1 - t) * f.pos[j] + t * f.pos[j + 1] - p).norm();
-          };
-          const Real rLo = distanceAt(lo), rHi = distanceAt(hi);
-          if (sc.distance < std::min(rLo, rHi) - kSideSkew) at[rLo <= rHi ? 1 : 0] = sc.s;
-        }
-      }
+      const Real at[2] = {n == 2 ? lo : 0.5 * (lo + hi), hi};
       for (int k = 0; k < n; ++k) {
         const Real s = at[k];
         fillPair(f, a, b, s, alongCP(f, b, (1 - s) * f.pos[i] + s * f.pos[i + 1]), ContactKind::Side, rule,
                  orient ? orient + k : nullptr, true, tangent, out[k]);
-        out[k].closest = n == 2 && s != lo && s != hi;
+      }
+      if (n == 2) {
+        // Skew pieces whose axes come closest inside the shared part (an X at a small angle): the
+        // ends do not see that approach, so the closest point (moving with the axes) takes the
+        // place of the farther end. B - A is linear in s between the ends (t(s) inside B), so |B - A|
+        // has its minimum inside when it falls at the first end and rises at the second; only then
+        // are the closest points sought (most side-by-side pairs lie alongside: no extra work).
+        const Vec3 v0 = out[0].normal * (out[0].gap + out[0].hA + out[0].hB);  // B - A at the ends
+        const Vec3 v1 = out[1].normal * (out[1].gap + out[1].hA + out[1].hB);
+        const Vec3 dv = v1 - v0;
+        if (v0.dot(dv) < 0 && v1.dot(dv) > 0) {
+          const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
+          const Real r0 = v0.norm(), r1 = v1.norm();
+          if (sc.s > lo && sc.s < hi && sc.distance < std::min(r0, r1) - kSideSkew) {
+            const int q = r0 <= r1 ? 1 : 0;
+            fillPair(f, a, b, sc.s, sc.t, ContactKind::Side, rule, orient ? orient + q : nullptr, true, tangent, out[q]);
+            out[q].closest = true;
+          }
+        }
       }
       return n;
     }
