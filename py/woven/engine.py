@@ -10,18 +10,39 @@ step; the adapter must run after YADE's NewtonIntegrator (attach appends it at t
 moved them from x_n to x_n + dt v already: the step takes them back to x_n, resolves the contacts
 with the fabric on the same (x_n, v_{n+1/2}) as the yarns, and moves them with the new velocities.
 """
+import re
+
 import yade.wrapper
 
 from ._woven import FabricEngine
 
 _O = yade.wrapper.Omega()
-_registry = {}
+_registry = {}   # key of the PyRunner command '_woven_step(key)' -> (engine, rewind)
+_unbound = {}    # key -> why no engine may step for it (woven.checkpoint: a scene loaded without its fabric)
+_COMMAND = re.compile(r'^_woven_step\((\d+)\)$')
 last_error = None  #: the last exception a woven step raised (InstabilityError keeps step, node, cause)
+
+
+def runners(engines=None):
+    """[(position in engines, PyRunner, key)] of the woven adapters in `engines` (default O.engines),
+    found by their command '_woven_step(key)' (woven.checkpoint uses it after O.load)."""
+    found = []
+    for i, e in enumerate(_O.engines if engines is None else engines):
+        if isinstance(e, yade.wrapper.PyRunner):
+            m = _COMMAND.match(e.command)
+            if m:
+                found.append((i, e, int(m.group(1))))
+    return found
 
 
 def _step(key):
     global last_error
-    engine, rewind = _registry[key]
+    try:
+        engine, rewind = _registry[key]
+    except KeyError:
+        last_error = RuntimeError(_unbound.get(key, 'woven: no engine is attached as _woven_step(%d) in this process '
+                                                    '(a scene loaded without woven.checkpoint? docs/reliability.md)' % key))
+        raise last_error from None
     try:
         if engine.n_bodies:
             # Coupled YADE bodies: their state in, one step, their new state out (C++, a few
@@ -58,16 +79,11 @@ def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
         raise ValueError('dt = %.12g is invalid: allowed (0, dt_crit = %.12g] s (stable limit of the chain; '
                          'set O.dt below it or attach(..., set_dt=True))' % (_O.dt, engine.dt_crit))
     # The same engine twice would step the fabric twice per YADE iteration (with YADE's O.dt each).
-    for e in _O.engines:
-        if isinstance(e, yade.wrapper.PyRunner) and e.command.startswith('_woven_step('):
-            try:
-                k = int(e.command[len('_woven_step('):-1])
-            except ValueError:
-                continue
-            if k in _registry and _registry[k][0] is engine:
-                raise ValueError('engine = %r is invalid: allowed an engine not attached yet (it is already in '
-                                 'O.engines as %r; attach each engine once)' % (engine, e.command))
-    key = len(_registry)
+    for _, e, k in runners():
+        if k in _registry and _registry[k][0] is engine:
+            raise ValueError('engine = %r is invalid: allowed an engine not attached yet (it is already in '
+                             'O.engines as %r; attach each engine once)' % (engine, e.command))
+    key = 1 + max(list(_registry) + list(_unbound), default=-1)
     # Bodies coupled to the fabric (woven.coupling) were already moved over this iteration's step
     # when a NewtonIntegrator runs before the adapter: the step rewinds them to x_n first.
     newton = [i for i, e in enumerate(_O.engines) if isinstance(e, yade.wrapper.NewtonIntegrator) and not e.dead]
