@@ -290,6 +290,8 @@ def reload(quiet=False):
 
 def _method(fn, name):
     def m(self, *args, **kw):
+        if 'file' in kw:  # YADE's keyword for the path
+            args = (kw.pop('file'),) + args
         return fn(*args, **kw)
     m.__name__ = name
     m.__doc__ = ((_orig.get(name) or getattr(yade.wrapper.Omega, name)).__doc__ or '') + \
