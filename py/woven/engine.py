@@ -9,6 +9,9 @@ YADE bodies coupled to the fabric (woven.coupling.couple) are read before and wr
 step; the adapter must run after YADE's NewtonIntegrator (attach appends it at the end), which has
 moved them from x_n to x_n + dt v already: the step takes them back to x_n, resolves the contacts
 with the fabric on the same (x_n, v_{n+1/2}) as the yarns, and moves them with the new velocities.
+
+YADE's O.save / O.load keep the adapter (its command) but not the fabric: woven.checkpoint saves the
+fabric beside the scene file and points the loaded adapters at their engines (runners() finds them).
 """
 import re
 
