@@ -201,7 +201,7 @@ def _restore(data, where, before):
     except Exception as e:
         reason = 'woven: the fabric of this scene was not restored (%s); O.load again once that is fixed' % e
         for _, runner, _ in found:
-            k = 1 + max(list(_engine._registry) + list(_engine._unbound), default=-1)
+            k = _engine.UNBOUND_KEYS + len(_engine._unbound)
             _engine._unbound[k] = reason
             runner.command = '_woven_step(%d)' % k
         raise

@@ -22,6 +22,7 @@ from ._woven import FabricEngine
 _O = yade.wrapper.Omega()
 _registry = {}   # key of the PyRunner command '_woven_step(key)' -> (engine, rewind)
 _unbound = {}    # key -> why no engine may step for it (woven.checkpoint: a scene loaded without its fabric)
+UNBOUND_KEYS = 1 << 30  # unbound keys from here on, apart from attach's keys 0, 1, 2 ...
 _COMMAND = re.compile(r'^_woven_step\((\d+)\)$')
 last_error = None  #: the last exception a woven step raised (InstabilityError keeps step, node, cause)
 
@@ -82,11 +83,16 @@ def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
         raise ValueError('dt = %.12g is invalid: allowed (0, dt_crit = %.12g] s (stable limit of the chain; '
                          'set O.dt below it or attach(..., set_dt=True))' % (_O.dt, engine.dt_crit))
     # The same engine twice would step the fabric twice per YADE iteration (with YADE's O.dt each).
-    for _, e, k in runners():
-        if k in _registry and _registry[k][0] is engine:
-            raise ValueError('engine = %r is invalid: allowed an engine not attached yet (it is already in '
-                             'O.engines as %r; attach each engine once)' % (engine, e.command))
-    key = 1 + max(list(_registry) + list(_unbound), default=-1)
+    for e in _O.engines:
+        if isinstance(e, yade.wrapper.PyRunner) and e.command.startswith('_woven_step('):
+            try:
+                k = int(e.command[len('_woven_step('):-1])
+            except ValueError:
+                continue
+            if k in _registry and _registry[k][0] is engine:
+                raise ValueError('engine = %r is invalid: allowed an engine not attached yet (it is already in '
+                                 'O.engines as %r; attach each engine once)' % (engine, e.command))
+    key = len(_registry)
     # Bodies coupled to the fabric (woven.coupling) were already moved over this iteration's step
     # when a NewtonIntegrator runs before the adapter: the step rewinds them to x_n first.
     newton = [i for i, e in enumerate(_O.engines) if isinstance(e, yade.wrapper.NewtonIntegrator) and not e.dead]
