@@ -16,6 +16,10 @@ from conftest import ROOT
 # and a YADE sphere (NewtonIntegrator, gravity) dropped onto it, coupled to the fabric: so the
 # state that must come back includes contacts, sections, the books and a YADE body.
 SCENE = '''
+import os
+# The PyRunner adapter, which woven.checkpoint is for (a native YADE engine, where installed, is saved
+# by YADE itself: docs/yade_native.md); WOVEN_NATIVE=0 makes woven.attach use it.
+os.environ['WOVEN_NATIVE'] = '0'
 import woven
 from yade import Vector3
 from yade.wrapper import Omega, ForceResetter, NewtonIntegrator
