@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 import woven
-from woven.output import savetxt, atomic_open, savefig
+from woven.output import savetxt, atomic_open, atomic_path, savefig
 from woven.params import read_params
 from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS
@@ -274,7 +274,8 @@ perforated = state['outcome'] == 'perforated'
 keys = list(rows[0].keys())
 S = np.array([[r[k] for k in keys] for r in rows])
 savetxt(os.path.join(d, 'series.csv'), S, delimiter=',', comments='', header=','.join(keys))
-plot.saveDataTxt(os.path.join(d, 'series.txt'))
+with atomic_path(os.path.join(d, 'series.txt')) as tmp:  # YADE's writer, atomically
+    plot.saveDataTxt(tmp)
 log = eng.break_log()
 with atomic_open(os.path.join(d, 'breaks.csv')) as f:
     f.write('time_s,step,yarn,element,x_m,y_m,z_m,filtered_strain,raw_strain,energy_J\n')

@@ -21,7 +21,7 @@ import numpy as np
 import woven
 import woven.campaign as campaign
 from woven.params import read_params
-from woven.output import out_dir, write_summary
+from woven.output import out_dir, savefig, write_summary
 
 p = read_params({
     'velocities': ('60,75,85,90,95,100,110,120,150,200', 'm/s', 'impact velocities, comma-separated, each in (0, 5000]'),
@@ -158,7 +158,7 @@ if rows:
     ax.set_ylabel('residual velocity [m/s]')
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(os.path.join(d, 'v50.png'), dpi=110)
+    savefig(fig, os.path.join(d, 'v50.png'), dpi=110)
 
 units = {'V50': 'm/s', 'V50_ci': 'm/s', 'V50_interval': 'm/s', 'V50_bootstrap_std': 'm/s', 'fit_rms': 'm/s', 'bracket': 'm/s',
          'mixed_zone': 'm/s', 'wall_seconds': 's', 'run_wall_mean': 's', 'run_wall_max': 's'}

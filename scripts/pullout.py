@@ -26,7 +26,7 @@ import time
 import numpy as np
 import woven
 from woven.params import read_params
-from woven.output import out_dir, write_summary
+from woven.output import out_dir, savefig, savetxt, write_summary
 from woven.weave import WEAVE_KEYS
 from woven.contact import CONTACT_KEYS
 
@@ -223,7 +223,7 @@ if phase['name'] == 'pull':
     sample()
 
 C = np.array(rows) if rows else np.zeros((0, 6))
-np.savetxt(os.path.join(d, 'curve.csv'), C, delimiter=',', comments='',
+savetxt(os.path.join(d, 'curve.csv'), C, delimiter=',', comments='',
            header='time_s,grip_displacement_m,grip_force_N,far_end_displacement_m,contacts,penetration_m')
 
 # --- results ---
@@ -300,7 +300,7 @@ if 'peak_force' in measured:
     a2.set_ylabel('far end displacement [mm] / overlap [%]')
     a2.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(os.path.join(d, 'pullout.png'), dpi=110)
+    savefig(fig, os.path.join(d, 'pullout.png'), dpi=110)
 
 if status == 'ok' and not all(c['passed'] for c in checks.values()):
     status = 'failed'

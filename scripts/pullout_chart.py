@@ -10,7 +10,7 @@ import sys
 
 import numpy as np
 from woven.params import read_params
-from woven.output import write_summary
+from woven.output import atomic_open, savefig, write_summary
 
 p = read_params({'runs': ('out/pullout-sweep', '', 'folder holding one sub-folder per run with its summary.json'),
                  'out': ('', '', 'output folder (default: runs)')})
@@ -33,7 +33,7 @@ if not rows:
 rows.sort()
 d = p.out or p.runs
 os.makedirs(d, exist_ok=True)
-with open(os.path.join(d, 'pullout_sweep.csv'), 'w') as f:
+with atomic_open(os.path.join(d, 'pullout_sweep.csv')) as f:
     f.write('pretension_N,friction,peak_force_N,peak_force_raw_N,pullout_energy_J,energy_balance_error,'
             'max_transient_penetration_m,wall_s,run,status\n')
     for r in rows:
@@ -61,7 +61,7 @@ for a in (a1, a2):
     a.legend(fontsize=8)
     a.grid(alpha=0.3)
 fig.tight_layout()
-fig.savefig(os.path.join(d, 'pullout_sweep.png'), dpi=110)
+savefig(fig, os.path.join(d, 'pullout_sweep.png'), dpi=110)
 
 # Trends: along each friction line with pre-tension > 0 ... and along each pre-tension > 0 line with
 # friction. At zero pre-tension nothing presses the crossings, so friction has nothing to act on.

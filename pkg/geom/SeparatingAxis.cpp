@@ -86,8 +86,10 @@ inline AxisTerms eberlyEdge(int i, int j, const OBB& a, const OBB& b, const Fram
 
 // The exact form for a near-parallel A_i x B_j (|c_ij| > kExactCos); L is returned for the normal and
 // the moving test. Out of line: it keeps the loops over Eberly's forms small. Cloned for CPUs with FMA
-// (picked at load time), where std::fma is one instruction instead of a call to libm.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+// (picked at load time), where std::fma is one instruction instead of a call to libm. Not under
+// GCC's ThreadSanitizer: the clones' ifunc resolver runs while the program is relocated, before the
+// TSan runtime starts, and its instrumented entry crashes there (scripts/tsan.sh gcc).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
 #define WOVEN_FMA_CLONES [[gnu::target_clones("fma", "default")]]
 #else
 #define WOVEN_FMA_CLONES

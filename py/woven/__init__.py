@@ -40,6 +40,8 @@ from ._woven import (FabricEngine, Fabric, Pattern, YarnMaterial, YarnSection, W
                      set_threads, threads, openmp_threads)
 from .weave import weave, pattern, WEAVE_KEYS  # noqa: E402,F401
 from .engine import attach  # noqa: E402,F401
+from . import checkpoint  # noqa: E402
+checkpoint.hook()  # O.save / O.load carry the fabric of woven adapters (docs/reliability.md)
 from .arrays import (positions, velocities, strains, tensions, masses, rest_lengths,  # noqa: E402,F401
                      section_flattening, section_semi_axes, contacts, candidate_pairs,
                      section_dirs, alive, filtered_strains, body_contacts)

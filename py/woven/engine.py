@@ -9,20 +9,45 @@ YADE bodies coupled to the fabric (woven.coupling.couple) are read before and wr
 step; the adapter must run after YADE's NewtonIntegrator (attach appends it at the end), which has
 moved them from x_n to x_n + dt v already: the step takes them back to x_n, resolves the contacts
 with the fabric on the same (x_n, v_{n+1/2}) as the yarns, and moves them with the new velocities.
+
+YADE's O.save / O.load keep the adapter (its command) but not the fabric: woven.checkpoint saves the
+fabric beside the scene file and points the loaded adapters at their engines (runners() finds them).
 """
+import re
+
 import yade.wrapper
 
 from ._woven import FabricEngine
 from . import _native  # the native YADE plugin's engine, when installed (docs/yade_native.md)
 
 _O = yade.wrapper.Omega()
-_registry = {}
+_registry = {}   # key of the PyRunner command '_woven_step(key)' -> (engine, rewind)
+_unbound = {}    # key -> why no engine may step for it (woven.checkpoint: a scene loaded without its fabric)
+UNBOUND_KEYS = 1 << 30  # unbound keys from here on, apart from attach's keys 0, 1, 2 ...
+_COMMAND = re.compile(r'^_woven_step\((\d+)\)$')
 last_error = None  #: the last exception a woven step raised (InstabilityError keeps step, node, cause)
+
+
+def runners(engines=None):
+    """[(position in engines, PyRunner, key)] of the woven adapters in `engines` (default O.engines),
+    found by their command '_woven_step(key)' (woven.checkpoint uses it after O.load)."""
+    found = []
+    for i, e in enumerate(_O.engines if engines is None else engines):
+        if isinstance(e, yade.wrapper.PyRunner):
+            m = _COMMAND.match(e.command)
+            if m:
+                found.append((i, e, int(m.group(1))))
+    return found
 
 
 def _step(key):
     global last_error
-    engine, rewind = _registry[key]
+    try:
+        engine, rewind = _registry[key]
+    except KeyError:
+        last_error = RuntimeError(_unbound.get(key, 'woven: no engine is attached as _woven_step(%d) in this process '
+                                                    '(a scene loaded without woven.checkpoint? docs/reliability.md)' % key))
+        raise last_error from None
     try:
         if engine.n_bodies:
             # Coupled YADE bodies: their state in, one step, their new state out (C++, a few

@@ -9,6 +9,7 @@ import contextlib
 import json
 import math
 import os
+import sys
 import tempfile
 
 
@@ -66,10 +67,45 @@ def savefig(fig, path, **kw):
 
 
 def out_dir(name, params):
-    """out/NAME under the working directory, or the folder given by params['out'] if not empty."""
+    """out/NAME under the working directory, or the folder given by params['out'] if not empty.
+
+    Under yade-batch (YADE_BATCH set) a run whose folder already holds a complete summary.json of
+    this scene made with the same keys is not done again: the script stops here with the recorded
+    outcome (exit 0 for status 'ok', else 1), so a sweep killed mid-way resumes where it was by
+    running the same yade-batch command again. WOVEN_RESUME=0 in the environment runs it anyway.
+    Outside yade-batch a scene always runs (a run killed mid-way and started again overwrites its
+    folder's files, each of them atomically)."""
     d = params.get('out') or os.path.join('out', name)
     os.makedirs(d, exist_ok=True)
+    if os.environ.get('YADE_BATCH') and os.environ.get('WOVEN_RESUME', '1') != '0':
+        s = complete_summary(d, name, params)
+        if s is not None:
+            print('%s: %s holds a complete summary.json for these keys (status %s): not run again '
+                  '(yade-batch resume; WOVEN_RESUME=0 runs it)' % (name, d, s['status']))
+            sys.stdout.flush()
+            sys.exit(0 if s['status'] == 'ok' else 1)
     return d
+
+
+def complete_summary(d, name, params):
+    """The summary.json in folder `d` as a dict when it is complete: it parses, belongs to scene
+    `name`, has a final status, and was made with `params` (every key but 'out'); else None. A
+    summary written halfway cannot exist (write_summary is atomic); one of another scene or of
+    other keys does not count."""
+    from .campaign import _same
+    try:
+        with open(os.path.join(d, 'summary.json')) as f:
+            s = json.load(f)
+    except (OSError, ValueError):
+        return None
+    if not isinstance(s, dict) or s.get('scene') != name or s.get('status') not in ('ok', 'failed', 'unstable'):
+        return None
+    q = s.get('parameters')
+    if not isinstance(q, dict) or not isinstance(s.get('measured'), dict):
+        return None
+    if any(k != 'out' and (k not in q or not _same(q[k], v)) for k, v in params.items()):
+        return None
+    return s
 
 
 def _clean(x):
