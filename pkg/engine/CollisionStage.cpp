@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <iterator>
+#include <type_traits>
 #include <cmath>
 
 namespace woven {
@@ -171,27 +172,37 @@ bool CollisionStage::reuse(const Fabric& f, std::size_t k, CPContact& c) const {
   return true;
 }
 
-// After a broad phase the cache follows its pairs (both lists sorted): a pair kept keeps its entry.
-void CollisionStage::remapCache() {
-  cacheOld_.swap(cache_);
-  cache_.assign(pairs_.size(), PairCache());
-  std::size_t o = 0;
-  for (std::size_t k = 0; k < pairs_.size(); ++k) {
-    while (o < cachePairs_.size() && cachePairs_[o] < pairs_[k]) ++o;
-    if (o < cachePairs_.size() && cachePairs_[o] == pairs_[k]) cache_[k] = cacheOld_[o];
-  }
+// After a broad phase the cache (model Paper) or the memory (model Gap) follows its pairs (both
+// lists sorted): a pair kept keeps its entry. Only the one in use is kept: the contact cache entry
+// is ten times the memory's size, and copying it for every pair was a share of the gap model's
+// narrow phase.
+void CollisionStage::remapCache(bool caching, bool gapModel) {
+  const auto follow = [&](auto& now, auto& old, bool used) {
+    old.swap(now);
+    now.assign(used ? pairs_.size() : 0, typename std::decay_t<decltype(now)>::value_type());
+    if (!used) return;
+    std::size_t o = 0;
+    for (std::size_t k = 0; k < pairs_.size(); ++k) {
+      while (o < cachePairs_.size() && cachePairs_[o] < pairs_[k]) ++o;
+      if (o < cachePairs_.size() && cachePairs_[o] == pairs_[k] && o < old.size()) now[k] = old[o];
+    }
+  };
+  follow(cache_, cacheOld_, caching);
+  follow(memo_, memoOld_, gapModel);
   cachePairs_ = pairs_;
 }
 
 void CollisionStage::narrow(const Fabric& f, Real dt) {
   ++cacheClock_;
   if (sectionStamp_.size() != f.elem0.size()) sectionStamp_.assign(f.elem0.size(), 0);
-  if (cachePairs_.size() != pairs_.size() || pairsChanged_) remapCache();
-  pairsChanged_ = false;
   // Section springs reset every section each step (restoreSections): no contact outlives its sections.
   const bool caching = params_.cacheDistance > 0 && params_.flattening != Flattening::Springs &&
                        params_.model == ContactModel::Paper;
   const bool gapModel = params_.model == ContactModel::Gap;
+  if (cachePairs_.size() != pairs_.size() || pairsChanged_ || cache_.size() != (caching ? pairs_.size() : 0) ||
+      memo_.size() != (gapModel ? pairs_.size() : 0))
+    remapCache(caching, gapModel);
+  pairsChanged_ = false;
   if (gapModel) {  // each node's major semi-axis [m]
     widest_.resize(f.secRadius.size());
     parallelFor(f.nNodes(), kParallelGrain, threads(),
@@ -220,16 +231,16 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         ++reused_[t];
         continue;
       }
-      PairCache& pc = cache_[k];
-      pc.valid = false;
+      if (caching) cache_[k].valid = false;
       // The bounds lie inside the boxes grown by the step's motion: where those do not meet, the
       // pair neither touches nor meets within the step (a yes/no SAT with early out, cheaper than
       // the static test's depth and far cheaper than the moving test's four sweeps).
       if (!obbOverlap(grown_[pr.a], grown_[pr.b])) {
-        pc.memoPoints = 0;  // the sections may turn unseen while apart: their measure is forgotten
+        if (gapModel) memo_[k].memoPoints = 0;  // the sections may turn unseen while apart: measure forgotten
         continue;
       }
       if (gapModel) {
+        PairMemo& pc = memo_[k];
         // The pair's gap functions; listed when they can close within the step (speculative
         // contacts: the row lets each close exactly its gap), bounded by the node speeds.
         const Index i = f.elem0[pr.a], j = f.elem0[pr.b];
@@ -273,6 +284,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
       if (cpContactStatic(f, bounds_, pr.a, pr.b, params_.margin, params_.rule, c)) {
         out.push_back(c);
         if (caching) {
+          PairCache& pc = cache_[k];
           pc.valid = true, pc.contact = c, pc.clock = cacheClock_;
           const Index i = f.elem0[pr.a], j = f.elem0[pr.b];
           pc.x[0] = f.pos[i], pc.x[1] = f.pos[i + 1], pc.x[2] = f.pos[j], pc.x[3] = f.pos[j + 1];

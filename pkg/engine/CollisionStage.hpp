@@ -104,7 +104,7 @@ class CollisionStage : public StepHook {
   /// Forgets the carried contacts (ContactParams::cacheDistance): every pair is tested at the next
   /// step. Called when a state is saved or loaded, so that a run continued from a saved state and
   /// the run that saved it go on bit for bit alike.
-  void invalidateCache() { cache_.clear(), cachePairs_.clear(), forgetHeld_ = true; }
+  void invalidateCache() { cache_.clear(), memo_.clear(), cachePairs_.clear(), forgetHeld_ = true; }
   /// Largest overlap of body k with any CP in the fabric as it stands [m] (<= 0: clear of it); moves
   /// nothing.
   Real bodyOverlap(Fabric& f, int k);
@@ -135,10 +135,10 @@ class CollisionStage : public StepHook {
   void refit(Fabric& f, Real dt);
   void broad(const Fabric& f);
   void narrow(const Fabric& f, Real dt);
-  struct PairCache {
-    // The pair's memory (model Gap; kept while the broad phase keeps the pair, forgotten with the
-    // cache): its kind (Side / Cross hysteresis), the side its normal points to, and the measure
-    // its sections claimed (GapFunction.hpp, capMeasure).
+  // A pair's memory (model Gap; kept while the broad phase keeps the pair, forgotten with the cache):
+  // its kind (Side / Cross hysteresis), the side its normal points to, and the measure its sections
+  // claimed (GapFunction.hpp, capMeasure). Apart from PairCache: small, and only this is remapped.
+  struct PairMemo {
     bool memo = false, side = false;
     // Its contact points at the last narrow phase that measured it (1 or 2; 0: measure forgotten,
     // the pair was not measured since its boxes parted): A's place sA, the normal and the sections'
@@ -146,13 +146,16 @@ class CollisionStage : public StepHook {
     int memoPoints = 0;
     Real memoS[2] = {0, 0}, memoMeasure[2] = {0, 0};
     Vec3 memoNormal[2] = {Vec3::Zero(), Vec3::Zero()};
+  };
+  // A pair's last static contact (model Paper, contact_cache > 0: ContactParams::cacheDistance).
+  struct PairCache {
     bool valid = false;
     long clock = 0;     // narrow phase that measured it
     CPContact contact;
     Vec3 x[4];          // the four node positions then [m]
   };
   bool reuse(const Fabric& f, std::size_t k, CPContact& c) const;
-  void remapCache();
+  void remapCache(bool caching, bool gapModel);
   void narrowBodies(const Fabric& f, Real dt);
   int flatten(Fabric& f, int maxPasses);
   std::function<Real(const CPContact&)> capacityOf(const Fabric& f) const;
@@ -181,7 +184,8 @@ class CollisionStage : public StepHook {
   std::vector<Real> capacity_;                  // flatten: both CPs' flattening capacity per contact [m]
   std::vector<std::uint8_t> dirty_, dirtyYarn_, outside_;
   std::vector<CPPair> keptPairs_, freshPairs_, cachePairs_;
-  std::vector<PairCache> cache_, cacheOld_;
+  std::vector<PairCache> cache_, cacheOld_;  // model Paper with a contact cache
+  std::vector<PairMemo> memo_, memoOld_;     // model Gap
   std::vector<long> sectionStamp_;  // per CP: narrow phase in which its sections last changed
   long cacheClock_ = 0;
   bool pairsChanged_ = false;
