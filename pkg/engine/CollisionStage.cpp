@@ -86,8 +86,7 @@ void CollisionStage::refit(Fabric& f, Real dt) {
   // Each CP's broad-phase box grows by the farthest its nodes can drift in the step, and (gap model)
   // be moved by the position projection after it.
   grow_.resize(bounds_.size());
-  const Real projected =
-      dt > 0 && params_.projectionSweepCount() > 0 ? kProjectionTravel * params_.projectionMaxMove : 0.0;
+  const Real projected = projectionReach(dt);
   parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
     const Index i = f.elem0[e];
     grow_[e] = dt * std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm())) + projected;
@@ -210,8 +209,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
   }
   // Pairs the position projection may move together (each node at most kProjectionTravel x
   // projectionMaxMove) are listed too.
-  const Real projectionReach =
-      dt > 0 && params_.projectionSweepCount() > 0 ? kProjectionTravel * params_.projectionMaxMove : 0.0;
+  const Real projected = projectionReach(dt);
   // Fixed chunks of the sorted pairs (threads take them in any order), concatenated in chunk order:
   // the same contacts in the same order for any thread count (each pair's cache entry is its own).
   constexpr Index kPairChunk = 512;
@@ -244,7 +242,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         // The pair's gap functions; listed when they can close within the step (speculative
         // contacts: the row lets each close exactly its gap), bounded by the node speeds.
         const Index i = f.elem0[pr.a], j = f.elem0[pr.b];
-        const Real reach = params_.margin + 2 * projectionReach +
+        const Real reach = params_.margin + 2 * projected +
                            dt * (std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm())) +
                                  std::sqrt(std::max(f.vel[j].squaredNorm(), f.vel[j + 1].squaredNorm())));
         // No section reaches beyond its major semi-axis: pairs whose axes are farther apart than
@@ -323,8 +321,7 @@ void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
   const bool gapModel = params_.model == ContactModel::Gap;
   // The position projection may move a node by this much after the drift (toward the body, pushed
   // by its other contacts): such contacts are listed too, as the CP pairs are (narrow).
-  const Real projectionReach =
-      dt > 0 && params_.projectionSweepCount() > 0 ? kProjectionTravel * params_.projectionMaxMove : 0.0;
+  const Real projected = projectionReach(dt);
   for (const BodyCandidate& pc : bodyPairs_) {
     const BodyContact* held = nullptr;
     if (gapModel) {
@@ -332,7 +329,7 @@ void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
                                        std::make_pair(key(pc.cp, pc.body, pc.part), std::size_t(0)));
       if (it != heldKeys_.end() && it->first == key(pc.cp, pc.body, pc.part)) held = &heldBody_[it->second];
     }
-    const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin + projectionReach, params_.rule, c,
+    const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin + projected, params_.rule, c,
                                      &tangent_, held)
                            : cpBodyContact(f, bounds_[pc.cp], pc.cp, bodies[pc.body], pc.part, dt, params_.margin,
                                            params_.rule, c[0]);

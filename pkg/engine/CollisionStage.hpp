@@ -133,6 +133,11 @@ class CollisionStage : public StepHook {
 
  private:
   void refit(Fabric& f, Real dt);
+  /// How far the position projection may move a node after the drift [m] (kProjectionTravel x
+  /// projection_max_move; 0 without it): boxes grow by it and pairs within it are listed.
+  Real projectionReach(Real dt) const {
+    return dt > 0 && params_.projectionSweepCount() > 0 ? kProjectionTravel * params_.projectionMaxMove : 0.0;
+  }
   void broad(const Fabric& f);
   void narrow(const Fabric& f, Real dt);
   // A pair's memory (model Gap; kept while the broad phase keeps the pair, forgotten with the cache):

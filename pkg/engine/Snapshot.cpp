@@ -39,7 +39,7 @@ struct In {
   T get() {
     T v;
     need(sizeof(T));
-    std::memcpy(&v, b.data() + at, sizeof(T));
+    std::memcpy(static_cast<void*>(&v), b.data() + at, sizeof(T));  // T is trivially copyable in its bytes (Eigen fixed-size)
     at += sizeof(T);
     return v;
   }
@@ -48,7 +48,7 @@ struct In {
     const auto n = get<std::uint64_t>();
     if (n > (b.size() - at) / sizeof(T)) fail("truncated bytes");
     a.resize(n);
-    if (n) std::memcpy(a.data(), b.data() + at, n * sizeof(T));
+    if (n) std::memcpy(static_cast<void*>(a.data()), b.data() + at, n * sizeof(T));
     at += n * sizeof(T);
   }
 };
