@@ -295,16 +295,8 @@ void yadeStep(FabricEngine& e, Real dt, bp::object yadeBodies, bool rewind) {
     for (RigidBody& b : st->bodies) {
       bp::object s = yadeBodies[b.id].attr("state");
       states.push_back(s);
-      Vec3 pos = bp::extract<Vec3>(s.attr("pos"));
-      Quat ori = bp::extract<Quat>(s.attr("ori"));
-      const Vec3 vel = bp::extract<Vec3>(s.attr("vel"));
-      const Vec3 w = bp::extract<Vec3>(s.attr("angVel"));
-      if (rewind) {
-        pos -= dt * vel;
-        const Real angle = w.norm() * dt;
-        if (angle > 0) ori = (Quat(Eigen::AngleAxis<Real>(-angle, w.normalized())) * ori).normalized();
-      }
-      b.pos = pos, b.ori = ori, b.vel = vel, b.angVel = w;
+      b.setHostState(bp::extract<Vec3>(s.attr("pos")), bp::extract<Quat>(s.attr("ori")),
+                     bp::extract<Vec3>(s.attr("vel")), bp::extract<Vec3>(s.attr("angVel")), dt, rewind);
     }
   }
   e.step(dt);
@@ -318,8 +310,7 @@ void yadeStep(FabricEngine& e, Real dt, bp::object yadeBodies, bool rewind) {
       s.attr("vel") = b.vel;
       s.attr("angVel") = b.angVel;
       // YADE integrates an aspherical body (a clump) through its angular momentum: keep them together.
-      const Vec3 wl = b.ori.conjugate() * b.angVel;
-      s.attr("angMom") = Vec3(b.ori * Vec3(b.inertia.cwiseProduct(wl)));
+      s.attr("angMom") = b.angularMomentum();
     }
   }
 }

@@ -1,7 +1,6 @@
 #include "engine/HostBridge.hpp"
 #include "engine/FabricEngine.hpp"
 #include "shape/Section.hpp"
-#include <Eigen/Geometry>
 
 namespace woven {
 
@@ -22,15 +21,8 @@ void hostStep(FabricEngine& e, double dt, std::vector<HostBody>& bodies, bool re
   for (std::size_t k = 0; k < nb; ++k) {
     const HostBody& h = bodies[k];
     RigidBody& b = st->bodies[k];
-    Vec3 pos(h.pos[0], h.pos[1], h.pos[2]);
-    Quat ori(h.ori[3], h.ori[0], h.ori[1], h.ori[2]);
-    const Vec3 vel(h.vel[0], h.vel[1], h.vel[2]), w(h.angVel[0], h.angVel[1], h.angVel[2]);
-    if (rewind) {
-      pos -= dt * vel;
-      const Real angle = w.norm() * dt;
-      if (angle > 0) ori = (Quat(Eigen::AngleAxis<Real>(-angle, w.normalized())) * ori).normalized();
-    }
-    b.pos = pos, b.ori = ori, b.vel = vel, b.angVel = w;
+    b.setHostState(Vec3(h.pos[0], h.pos[1], h.pos[2]), Quat(h.ori[3], h.ori[0], h.ori[1], h.ori[2]),
+                   Vec3(h.vel[0], h.vel[1], h.vel[2]), Vec3(h.angVel[0], h.angVel[1], h.angVel[2]), dt, rewind);
   }
   e.step(dt);
   for (std::size_t k = 0; k < nb; ++k) {
@@ -38,8 +30,7 @@ void hostStep(FabricEngine& e, double dt, std::vector<HostBody>& bodies, bool re
     HostBody& h = bodies[k];
     h.dynamic = b.dynamic();
     if (!h.dynamic) continue;  // the host moves kinematic bodies itself
-    const Vec3 wl = b.ori.conjugate() * b.angVel;
-    const Vec3 L = b.ori * Vec3(b.inertia.cwiseProduct(wl));
+    const Vec3 L = b.angularMomentum();
     for (int i = 0; i < 3; ++i) h.pos[i] = b.pos[i], h.vel[i] = b.vel[i], h.angVel[i] = b.angVel[i], h.angMom[i] = L[i];
     h.ori[0] = b.ori.x(), h.ori[1] = b.ori.y(), h.ori[2] = b.ori.z(), h.ori[3] = b.ori.w();
   }

@@ -64,6 +64,23 @@ struct RigidBody {
     const Vec3 wl = ori.conjugate() * angVel;
     return 0.5 * mass * vel.squaredNorm() + 0.5 * wl.dot(inertia.cwiseProduct(wl));
   }
+  /// Angular momentum I w in the global frame [kg m^2/s]: what YADE integrates an aspherical body
+  /// (a clump) through, so the host gets it with the angular velocity.
+  Vec3 angularMomentum() const {
+    const Vec3 wl = ori.conjugate() * angVel;
+    return ori * Vec3(inertia.cwiseProduct(wl));
+  }
+  /// Takes the host's state (YADE's State). With `rewind` the host's integrator ran before this
+  /// step in the same iteration and already moved the body from x_n to x_n + dt v: the pose is taken
+  /// back to x_n (the engine adapters, py/woven_module.cpp and engine/HostBridge).
+  void setHostState(Vec3 p, Quat q, const Vec3& v, const Vec3& w, Real dt, bool rewind) {
+    if (rewind) {
+      p -= dt * v;
+      const Real angle = w.norm() * dt;
+      if (angle > 0) q = (Quat(Eigen::AngleAxis<Real>(-angle, w.normalized())) * q).normalized();
+    }
+    pos = p, ori = q, vel = v, angVel = w;
+  }
   /// Throws ParameterError naming the field ("mass", "inertia", "parts", ...) and its range.
   void validate() const;
 };

@@ -1,6 +1,7 @@
 // Ballistic pieces: yarn breakage (filtered strain against the raw one on Smith's impact, Weibull
 // strengths, released energy) and rigid bodies colliding with yarns (momentum exchange, no
 // tunnelling at 1000 m/s, restitution, the moving test, bad input).
+#include "body_util.hpp"
 #include "chain_util.hpp"
 #include "engine/FabricEngine.hpp"
 #include "geom/BodyContact.hpp"
@@ -178,23 +179,6 @@ std::unique_ptr<FabricEngine> yarnEngine(Real restitution, bool clampEnds) {
   return e;
 }
 
-RigidBody cube(Real half, Real mass, const Vec3& pos, const Vec3& vel) {
-  RigidBody b;
-  RigidPart part;
-  part.type = RigidPart::Type::Box, part.halfSize = Vec3::Constant(half);
-  b.parts.push_back(part);
-  b.mass = mass, b.inertia = Vec3::Constant(mass * 4 * half * half / 6), b.pos = pos, b.vel = vel;
-  return b;
-}
-
-RigidBody ball(Real r, Real mass, const Vec3& pos, const Vec3& vel) {
-  RigidBody b;
-  RigidPart part;
-  part.type = RigidPart::Type::Sphere, part.radius = r;
-  b.parts.push_back(part);
-  b.mass = mass, b.inertia = Vec3::Constant(0.4 * mass * r * r), b.pos = pos, b.vel = vel;
-  return b;
-}
 
 Vec3 momentum(const FabricEngine& e) {
   Vec3 p = Vec3::Zero();

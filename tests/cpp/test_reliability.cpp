@@ -1,6 +1,7 @@
 // Reliability (issue 14): refused input changes nothing, restarts are bit for bit with breakage and
 // energy books, state files are checked whole before anything is loaded, writes are atomic and
 // report errors, read-only queries move nothing, absurd physical values are refused.
+#include "body_util.hpp"
 #include "chain_util.hpp"
 #include "engine/FabricEngine.hpp"
 #include "fabric/StateIO.hpp"
@@ -118,16 +119,7 @@ std::unique_ptr<FabricEngine> struckPly() {
   BreakageParams b;
   b.enabled = true;
   e->dynamics().configureBreakage(b);
-  Vec3 lo = e->fabric().pos[0], hi = lo;
-  for (const Vec3& x : e->fabric().pos) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-  RigidBody cube;
-  RigidPart part;
-  const Real half = 1.5e-3, mass = 1e-3;
-  part.type = RigidPart::Type::Box, part.halfSize = Vec3::Constant(half);
-  cube.parts.push_back(part);
-  cube.mass = mass, cube.inertia = Vec3::Constant(mass * 4 * half * half / 6);
-  cube.pos = Vec3(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), hi.z() + half + 0.2e-3), cube.vel = Vec3(0, 0, -300);
-  e->collisions()->bodies.push_back(cube);
+  e->collisions()->bodies.push_back(cubeAbove(e->fabric(), 1.5e-3, 1e-3, 0.2e-3, Vec3(0, 0, -300)));
   return e;
 }
 

@@ -1,6 +1,7 @@
 // Engine snapshots (pkg/engine/Snapshot.hpp, what the YADE plugin stores in O.save's files): an
 // engine rebuilt from the bytes continues bit for bit as the engine that wrote them, with collisions,
 // a rigid body, loads and yarn breaks; damaged bytes are refused.
+#include "body_util.hpp"
 #include "chain_util.hpp"
 #include "engine/Snapshot.hpp"
 #include "weave/WeaveBuilder.hpp"
@@ -33,17 +34,9 @@ std::shared_ptr<FabricEngine> struckPly() {
   BreakageParams b;
   b.enabled = true, b.threshold = 0.01, b.filterLength = 0;
   e->dynamics().configureBreakage(b);
-  Vec3 lo = e->fabric().pos[0], hi = lo;
-  for (const Vec3& x : e->fabric().pos) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-  RigidBody cube;
-  RigidPart part;
-  const Real half = 1.5e-3, mass = 1e-3;
-  part.type = RigidPart::Type::Box, part.halfSize = Vec3::Constant(half);
-  cube.parts.push_back(part);
-  cube.mass = mass, cube.inertia = Vec3::Constant(mass * 4 * half * half / 6);
-  cube.pos = Vec3(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), hi.z() + half + 0.2e-3);
-  cube.vel = Vec3(0, 0, -600), cube.angVel = Vec3(0, 2e3, 0);
-  e->collisions()->bodies.push_back(cube);
+  RigidBody spinning = cubeAbove(e->fabric(), 1.5e-3, 1e-3, 0.2e-3, Vec3(0, 0, -600));
+  spinning.angVel = Vec3(0, 2e3, 0);
+  e->collisions()->bodies.push_back(spinning);
   return e;
 }
 

@@ -2,6 +2,7 @@
 // the same bits (positions, velocities, sections, broken elements, energy books, bodies). Scenes
 // large enough that every parallel loop splits into several chunks: a decrimping weave with
 // collisions, and a small clamped ply struck by a cube fast enough to break yarns.
+#include "body_util.hpp"
 #include "chain_util.hpp"
 #include "core/Parallel.hpp"
 #include "engine/FabricEngine.hpp"
@@ -90,16 +91,7 @@ Outcome ballistic(int threads, int steps) {
   BreakageParams b;
   b.enabled = true, b.threshold = 0.01, b.filterLength = 0;
   e.dynamics().configureBreakage(b);
-  Vec3 lo = e.fabric().pos[0], hi = lo;
-  for (const Vec3& x : e.fabric().pos) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-  RigidBody cube;
-  RigidPart part;
-  const Real half = 1.5e-3, mass = 1e-3;
-  part.type = RigidPart::Type::Box, part.halfSize = Vec3::Constant(half);
-  cube.parts.push_back(part);
-  cube.mass = mass, cube.inertia = Vec3::Constant(mass * 4 * half * half / 6);
-  cube.pos = Vec3(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), hi.z() + half + 0.2e-3), cube.vel = Vec3(0, 0, -1000);
-  e.collisions()->bodies.push_back(cube);
+  e.collisions()->bodies.push_back(cubeAbove(e.fabric(), 1.5e-3, 1e-3, 0.2e-3, Vec3(0, 0, -1000)));
   const Real dt = 0.7 * e.criticalDt();
   for (int s = 0; s < steps; ++s) e.step(dt);
   Outcome o = finish(e);
