@@ -20,6 +20,7 @@ import numpy as np
 import woven
 from woven.output import savetxt, atomic_open, atomic_path, savefig
 from woven.params import read_params
+from woven.energy_guard import EnergyGuard
 from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS
 from woven.contact import CONTACT_KEYS
@@ -71,6 +72,8 @@ defaults.update({
     'weibull_m': (0.0, '', 'Weibull modulus of yarn strength (0: none; else [1, 100])'),
     'seed': (1, '', 'seed of the Weibull draw'),
     'safety': (0.7, '', 'O.dt = safety * dt_crit'),
+    'energy_guard': (0.005, '', 'energy-balance error past which O.dt drops to guard_safety * dt_crit for the rest of the run, in [0, energy_limit) (0: off; woven.energy_guard)'),
+    'guard_safety': (0.35, '', 'O.dt = guard_safety * dt_crit once the guard acts, in (0, safety]'),
     'samples': (400, '', 'rows of the time series at most'),
     'vtk_every': (0, '', 'write VTK frames every this many steps (0: first and last frame only; -1: none)'),
     'vtk_rings': (8, '', 'points per section ellipse in the VTK tubes'),
@@ -108,6 +111,10 @@ if not (math.isfinite(p.t_end) and 0 < p.t_end <= 0.01):
     bad('t_end', '(0, 0.01] s')
 if not (0 < p.safety <= 1):
     bad('safety', '(0, 1]')
+if not (0 <= p.energy_guard < p.energy_limit):
+    bad('energy_guard', '[0, energy_limit = %g) (0: off)' % p.energy_limit)
+if not (0 < p.guard_safety <= p.safety):
+    bad('guard_safety', '(0, safety = %g]' % p.safety)
 if p.samples < 10:
     bad('samples', '[10, inf)')
 if not (0 < p.energy_limit < 1):
@@ -143,8 +150,9 @@ proj = woven.ballistic.add_projectile(ply, p.shape, p.mass, p.size, p.V, p.stand
 
 O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
 woven.attach(eng, set_dt=True, safety=p.safety)
-steps_max = int(math.ceil(p.t_end / O.dt))
-every = max(1, steps_max // p.samples)
+every = max(1, int(math.ceil(p.t_end / O.dt)) // p.samples)
+guard = EnergyGuard(eng, p.energy_guard, p.guard_safety)
+steps_max = int(math.ceil(p.t_end / guard.smallest_dt()))  # the run stops at t_end (watch)
 KE0 = 0.5 * p.mass * p.V ** 2
 E0 = eng.energy()
 fabric_initial = E0['initial']
@@ -188,6 +196,9 @@ def sample():
                         + E['projection'] - KE0 - E['initial'] - (E['work'] - E['body_work'])) / KE0)
     rows.append(row)
     plot.addData(**row)
+    finer = guard.check(row['balance'])
+    if finer > 1:  # as many rows per simulated time as before
+        sampler.iterPeriod = max(1, int(round(sampler.iterPeriod * finer)))
 
 
 meter = OverlapMeter(eng, thickness)
@@ -226,7 +237,7 @@ def watch():
               % (O.time * 1e6, p.t_end * 1e6, proj.state.vel[2], s['contacts'], s['body_contacts'],
                  eng.broken_elements, time.time() - state['wall0']))
         sys.stdout.flush()
-    if p.stop and state['outcome'] != 'running':
+    if (p.stop and state['outcome'] != 'running') or O.time + O.dt >= p.t_end * (1 - 1e-12):
         O.pause()
 
 
@@ -243,7 +254,8 @@ def vtk_frame():
 
 import __main__
 __main__.sample, __main__.watch, __main__.vtk_frame = sample, watch, vtk_frame
-O.engines = O.engines + [PyRunner(command='watch()', iterPeriod=1), PyRunner(command='sample()', iterPeriod=every)]
+sampler = PyRunner(command='sample()', iterPeriod=every)
+O.engines = O.engines + [PyRunner(command='watch()', iterPeriod=1), sampler]
 if vtk_rec is not None and p.vtk_every > 0:
     O.engines = O.engines + [PyRunner(command='vtk_frame()', iterPeriod=p.vtk_every)]
 
@@ -304,6 +316,7 @@ measured = {
     'max_body_penetration': stats['max_body_penetration'], 'max_yarn_penetration': stats['max_penetration'],
     'settle_overlap': settle_left, 'yarn_thickness': thickness,
     'overlap': meter.summary(),
+    'energy_guard': guard.summary(),
 }
 info = eng.yarn(w.warp_yarns[0])
 reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-reference.md (Nilakantan et al.)

@@ -305,7 +305,7 @@ TEST(GapFunction, MeasureMemoryLetsTheMeasureGrowOnlyIntoRoom) {
       EXPECT_NEAR(k.hA * c0.hB, k.hB * c0.hA, 1e-14 * c0.hA * c0.hB);  // shared as before
       const Vec3 pA = c0.point - (c0.hA + 0.5 * c0.gap) * c0.normal;
       EXPECT_LT((k.point - (pA + (k.hA + 0.5 * k.gap) * k.normal)).norm(), 1e-18);
-      if (remembered >= H) EXPECT_EQ(k.gap, c0.gap);            // room enough: untouched, bit for bit
+      if (remembered >= H) { EXPECT_EQ(k.gap, c0.gap); }        // room enough: untouched, bit for bit
       // The cap holds for the rest of the step: sections measured again (after flattening) obey it.
       CPContact again = k;
       remeasure(f, again, SectionRule::ConstantArea, true);
@@ -341,4 +341,51 @@ TEST(GapFunction, SkewSideBySidePiecesHoldTheirClosestApproach) {
   ASSERT_EQ(pairGaps(g, 0, 1, true, SectionRule::ConstantArea, nullptr, c), 2);
   EXPECT_NEAR(std::min(c[0].sA, c[1].sA), 0.0, 1e-12);
   EXPECT_NEAR(std::max(c[0].sA, c[1].sA), 1.0, 1e-12);
+}
+
+// Side-by-side ends held by the segment end that makes them (SideAnchor): where B's ends lie
+// alongside A, each end of the shared part is B's end with A's closest point to it, a
+// vertex-segment distance (checked against the point-line distance computed here). Skew pieces
+// slide the shared part along A as they move: the last step's contact measured again at the new
+// positions (what its row and the projection act on) must equal the next narrow phase's end, so
+// that sliding opens no gap between them (a point held at its place on A left 10-15 um a step).
+TEST(GapFunction, SideBySideEndsAreHeldByTheEndsThatMakeThem) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<Real> angle(2, 18), gap(20e-6, 0.4e-3), shift(-0.2, 0.2), move(-20e-6, 20e-6);
+  const Real L = 0.4e-3, deg = 3.14159265358979323846 / 180;
+  int checked = 0;
+  for (int n = 0; n < 2000; ++n) {
+    const Real a = angle(rng) * deg, z = gap(rng), c0 = shift(rng) * L;
+    const Vec3 u(std::cos(a), std::sin(a), 0), mid(c0, 0, z);
+    Fabric f = randomPair(rng, Vec3(-L, 0, 0), Vec3(L, 0, 0), mid - 0.5 * L * u, mid + 0.5 * L * u);
+    CPContact c[2];
+    ASSERT_EQ(pairGaps(f, 0, 1, true, SectionRule::ConstantArea, nullptr, c), 2);
+    const Vec3 eA = f.pos[1] - f.pos[0];
+    for (int q = 0; q < 2; ++q) {
+      if (c[q].anchor == SideAnchor::Closest) continue;  // an X inside the shared part
+      ASSERT_EQ(c[q].anchor, SideAnchor::B);
+      ASSERT_TRUE(c[q].sB == 0 || c[q].sB == 1);
+      const Vec3 end = f.pos[2 + static_cast<Index>(c[q].sB)];
+      const Real foot = (end - f.pos[0]).dot(eA) / eA.squaredNorm();
+      EXPECT_NEAR(c[q].sA, foot, 1e-14);
+      const Real r = (end - f.pos[0]).cross(eA).norm() / eA.norm();  // point-line distance
+      EXPECT_NEAR(c[q].gap + c[q].hA + c[q].hB, r, 1e-15);
+    }
+    // B moves a little (a translation and a turn about its middle), the shared part slides.
+    const Vec3 t(move(rng), move(rng), move(rng));
+    const Real turn = 0.01 * move(rng) / 20e-6;
+    const Vec3 m = 0.5 * (f.pos[2] + f.pos[3]);
+    for (Index k = 2; k < 4; ++k) f.pos[k] = m + Eigen::AngleAxis<Real>(turn, Vec3::UnitZ()) * (f.pos[k] - m) + t;
+    CPContact fresh[2];
+    ASSERT_EQ(pairGaps(f, 0, 1, true, SectionRule::ConstantArea, nullptr, fresh), 2);
+    for (int q = 0; q < 2; ++q) {
+      if (c[q].anchor != SideAnchor::B || fresh[q].anchor != SideAnchor::B || fresh[q].sB != c[q].sB) continue;
+      CPContact again = c[q];
+      remeasure(f, again, SectionRule::ConstantArea, true);
+      EXPECT_NEAR(again.sA, fresh[q].sA, 1e-14);
+      EXPECT_NEAR(again.gap, fresh[q].gap, 1e-15) << "configuration " << n;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 1000);
 }
