@@ -90,8 +90,11 @@ defaults.update({
     # which the longitudinal wave brings ahead of the transverse front (measured: 10 um let it through).
     'backface_w': (1e-4, 'm', 'out-of-plane displacement that counts as moved (cone base radius, transverse front), in (0, 1e-3]'),
     'backface_strain': (5e-4, '', 'strain that counts as reached by the longitudinal wave, in (0, 0.1]'),
-    'front_tolerance': (0.25, '', 'allowed |measured / theory - 1| of the early front speeds, in (0, 10]'),
-    'pictures': (4, '', 'pictures of the deformed pack rendered with VTK (at t_end k / N and at the end), in [0, 100]; 0: none'),
+    # Measured: 5.0 / 6.6 % (transverse / strain front) at 200 m/s, 0.9 / 1.8 % at 400 m/s; the bare
+    # yarn's Smith is 25-27 % off, the membrane's c/sqrt(2) 13-17 % (docs/ballistic.md).
+    'front_tolerance': (0.1, '', 'allowed |measured / theory - 1| of the early front speeds, in (0, 10]'),
+    'pictures': (5, '', 'pictures of the deformed pack rendered with VTK: at t_end k / N (k < N) and at the end (for '
+                 'the default run 20, 40, 60 us and the perforation), N in [0, 100]; 0: none'),
 })
 defaults.update(woven.yade_grid.GRID_KEYS)
 p = read_params(defaults)
@@ -346,7 +349,8 @@ reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-referen
 units = {'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
          'simulated_time': 's', 'dt': 's', 'fine_radius': 'm', 'wall_seconds': 's', 'cpu_seconds': 's', 'cp_steps_per_second': '1/s', 'phase_seconds': 's',
          'energy': 'J', 'energy_balance_error': 'fraction of the projectile\'s initial kinetic energy',
-         'max_body_penetration': 'm', 'max_yarn_penetration': 'm', 'overlap': woven.overlap.UNITS, 'yarn_thickness': 'm', 'first_break_time': 's', 'mirror_seconds': 's'}
+         'max_body_penetration': 'm', 'max_yarn_penetration': 'm', 'overlap': woven.overlap.UNITS, 'yarn_thickness': 'm', 'first_break_time': 's', 'mirror_seconds': 's',
+         'pictures_seconds': 's'}
 checks = {'energy_balance': {'value': balance, 'limit': p.energy_limit, 'passed': bool(abs(balance) <= p.energy_limit),
                              'what': '(final kinetic + elastic + dissipated + released - initial) / initial kinetic energy'},
           'momentum_direction': {'value': v_res, 'limit': p.V, 'passed': bool(v_res <= p.V * (1 + 1e-9)),
@@ -364,7 +368,8 @@ if bf is not None:
     S_t, S_v = np.array([r['t'] for r in rows]), np.array([r['vz'] for r in rows])
     bf_m, bf_r, bf_c = woven.backface.compare(bf, S_t, S_v, half,
                                               0.5 * min(np.ptp(X0[:, 0]), np.ptp(X0[:, 1])), info['E'], info['rho'],
-                                              t_max=log[0]['time'] if log else None, tolerance=p.front_tolerance)
+                                              t_max=log[0]['time'] if log else None, tolerance=p.front_tolerance,
+                                              friction=p.friction)
     measured['backface'], reference['backface'] = bf_m, bf_r
     units['backface'] = dict(woven.backface.UNITS, apex_depth_end='m', base_radius_end='m', strain_front_speed='m/s',
                              transverse_front_speed='m/s', base_radius_speed='m/s')
@@ -374,7 +379,9 @@ if bf is not None:
                          '%s %.3g g at %.0f m/s' % (p.shape, p.mass * 1e3, p.V))
 if shots is not None:
     try:  # a picture that cannot be rendered fails the run's check, not the run
+        t_pic = time.time()
         measured['pictures'] = shots.finish(O.time, p.break_strain or info['failure_strain'])
+        measured['pictures_seconds'] = time.time() - t_pic
         checks['pictures'] = {'value': len(measured['pictures']), 'limit': p.pictures, 'passed': True,
                               'what': 'pictures of the deformed pack written'}
     except (RuntimeError, OSError, subprocess.TimeoutExpired) as ex:

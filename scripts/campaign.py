@@ -87,7 +87,8 @@ for tok in shlex.split(p.scene.replace(';', ' ')):
 woven.contact.check_friction(scene)  # friction and body_friction refused before any run starts
 d = out_dir('campaign', p)
 # What every run gets besides V and seed: no VTK and no progress lines (the campaign has its own bar).
-keys = {'weibull_m': float(p.weibull_m), 't_end': float(p.t_end), 'vtk_every': -1, 'progress': 0.0}
+# No pictures either (a render per run; the back-face figures are still in each summary.json).
+keys = {'weibull_m': float(p.weibull_m), 't_end': float(p.t_end), 'vtk_every': -1, 'progress': 0.0, 'pictures': 0}
 keys.update(scene)
 runs = campaign.plan(velocities, seeds, keys, os.path.join(os.path.abspath(d), 'runs'))
 

@@ -57,7 +57,7 @@ def scene(shape, size_mm, V, cp, side_mm):
     keys = {'shape': shape, 'size': size, 'mass': float('%.4g' % (STEEL * volume)), 'V': float(V),
             'cp_per_span': cp, 'side': side_mm * 1e-3, 'contact_model': p.contact_model, 'progress': 0.0,
             'friction': p.friction, 'body_friction': p.body_friction,
-            'vtk_every': -1, 'overlap_limit': 100.0, 'energy_limit': 0.99}
+            'vtk_every': -1, 'overlap_limit': 100.0, 'energy_limit': 0.99, 'pictures': 0}
     name = '%s%.1f-V%04d-cp%d-ply%.1f' % (shape, size_mm, V, cp, side_mm)
     return {'name': name, 'keys': keys, 'out': os.path.join(d, 'runs', name)}
 

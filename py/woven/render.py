@@ -80,6 +80,7 @@ class Pictures:
             raise ValueError('pictures = %r is invalid: allowed 0 (none) or [1, 100]' % (count,))
         self.engine, self.dir, self.rings = engine, directory, rings
         self.times = [t_end * k / count for k in range(1, count)]
+        self.interval = t_end / count
         self.frames = []  # (paths, time)
 
     def due(self, time):
@@ -94,12 +95,24 @@ class Pictures:
         self.frames.append((write_frame(self.engine, os.path.join(self.dir, 'pictures'), stem, self.rings), time))
 
     def finish(self, time, strain_max, title=''):
-        """The last frame at `time` [s], then every picture; returns the PNG paths."""
-        if not self.frames or self.frames[-1][1] != time:
-            self.take(time)
+        """The last frame at `time` [s] (it replaces a frame taken within half a picture interval
+        before it), then every picture; returns the PNG paths."""
+        if self.frames and time - self.frames[-1][1] < 0.5 * self.interval:
+            self.frames.pop()
+        self.take(time)
         jobs = [(paths, os.path.join(self.dir, os.path.basename(paths[0])[:-len('_yarns.vtp')] + '.png'),
                  '%st = %.1f us' % (title, 1e6 * t)) for paths, t in self.frames]
-        return render(jobs, strain_max=strain_max)
+        pngs = render(jobs, strain_max=strain_max)
+        # The frames were only the renderer's input (3 MB each for the default ply; vtk_every keeps
+        # ParaView's): gone once their pictures exist. A failed render leaves them to look at.
+        for paths, _ in self.frames:
+            for p in paths:
+                os.remove(p)
+        try:
+            os.rmdir(os.path.join(self.dir, 'pictures'))
+        except OSError:
+            pass
+        return pngs
 
 
 def _draw(paths, png, title, strain_max, size):
@@ -170,11 +183,12 @@ def _draw(paths, png, title, strain_max, size):
     text.GetTextProperty().SetFontSize(20)
     text.SetPosition(12, 12)
     ren.AddViewProp(text)
-    # From behind (the side the projectile pushes the cone out of), 35 degrees off the normal.
-    cx, cy, cz = (0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]), 0.5 * (bounds[4] + bounds[5]))
+    # From behind (the side the projectile pushes the cone out of), 20 degrees below the ply's plane:
+    # low enough to see the cone's profile, high enough to see the strain over the ply.
+    cx, cy, cz = (0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]), bounds[5])
     cam = ren.GetActiveCamera()
     cam.SetFocalPoint(cx, cy, cz)
-    cam.SetPosition(cx + 0.55 * span, cy - 0.85 * span, cz - 1.2 * span)
+    cam.SetPosition(cx + 0.6 * span, cy - 1.6 * span, cz - 0.62 * span)
     cam.SetViewUp(0, 0, -1)
     ren.ResetCamera()
     cam.Zoom(1.25)

@@ -85,7 +85,8 @@ def test_front_speed_fits_the_first_passage():
     f = bfd.front_speed(t, r, 4e-3, 8e-3)
     assert f['speed'] == pytest.approx(400.0, rel=1e-9)
     assert 4e-3 - 1e-12 <= f['intercept'] + f['speed'] * f['t0'] and f['intercept'] + f['speed'] * f['t1'] <= 8e-3 + 1e-12
-    assert bfd.front_speed(t[:2], r[:2], 0, 1)['speed'] is None  # too few points
+    assert bfd.front_speed(t[:4], r[:4], 0, 1)['speed'] is None  # too few points
+    assert bfd.front_speed(t, r, 4e-3, 4.8e-3)['speed'] is None  # moved less than 1 mm
     assert bfd.front_speed(t, r, 1.0, 2.0)['speed'] is None  # never reached
 
 
@@ -158,3 +159,36 @@ def test_friction_books_close_in_a_small_impact(tmp_path):
     assert E['friction'] > 1e-3 * E['projectile_initial'], E
     assert abs(s['measured']['energy_balance_error']) <= 0.01
     assert s['checks']['energy_balance']['passed']
+
+
+@pytest.mark.parametrize('friction, strain_speed_of_c, passed', [(0.0, 1.0, True), (0.0, 0.8, False),
+                                                                 (0.3, 0.8, True), (0.3, 0.5, False)])
+def test_compare_checks_fronts_against_smith(friction, strain_speed_of_c, passed):
+    # Fronts constructed at the theory's speeds from the projectile's edge at first contact: the
+    # fitted speeds are those speeds, and the checks pass; a strain front at 0.8 c fails without
+    # friction (the theory is c) and passes with it (between c/sqrt(kappa) and c), at 0.5 c it fails.
+    w = woven.weave(nx=2, ny=2)
+    info = w.engine.yarn(w.warp_yarns[0])
+    E, rho = info['E'], info['rho']
+
+    class Series:
+        engine, families, yarns = w.engine, [w.warp_yarns, w.weft_yarns], [w.warp_yarns[0], w.weft_yarns[0]]
+        w_threshold, strain_threshold = 1e-4, 5e-4
+
+    kappa = bfd.mass_ratio(w.engine, w.warp_yarns)
+    assert kappa == pytest.approx(2.0, rel=0.02)
+    c, U = math.sqrt(E / rho), theory.smith_fabric(200.0, E, rho, kappa)['U_E']
+    reach, half, t_c = 2.8e-3, 25.4e-3, 1e-6
+    t = np.linspace(0, 30e-6, 3001)
+    on = t >= t_c
+    s = {'time': t, 'apex': np.where(on, 200.0 * (t - t_c), 0.0),
+         'transverse_front': np.where(on, reach + U * (t - t_c), 0.0),
+         'strain_front': np.where(on, np.minimum(reach + strain_speed_of_c * c * (t - t_c), half), 0.0)}
+    s['base_radius'] = s['transverse_front']
+    Series.series = staticmethod(lambda: s)
+    m, ref, checks = bfd.compare(Series, t, np.full(len(t), -200.0), reach, half, E, rho, friction=friction)
+    assert m['transverse_front_speed'] == pytest.approx(U, rel=1e-6)
+    assert m['strain_front_speed'] == pytest.approx(strain_speed_of_c * c, rel=1e-6)
+    assert checks['transverse_front_speed']['passed']
+    assert checks['strain_front_speed']['passed'] == passed
+    assert ref['smith_fabric_U_E'] == pytest.approx(U)
