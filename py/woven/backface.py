@@ -21,6 +21,7 @@ can be checked on a constructed field (tests/python/test_backface.py):
 Distances are measured in the current (lab) frame, as Smith's U_E is.
 """
 import math
+import time as _time
 
 import numpy as np
 
@@ -146,6 +147,7 @@ class BackFace:
             self.chains.append((np.arange(info['first_node'], info['first_node'] + info['n_nodes']), el, e0[el]))
         self.dense_radius = dense_radius
         self.rows = []
+        self.seconds = 0.0  # wall time spent measuring [s]
 
     def dense(self):
         """True until the strain front has passed `dense_radius` [m]: the longitudinal wave crosses a
@@ -158,6 +160,7 @@ class BackFace:
         returns that row."""
         if self.rows and self.rows[-1]['time'] == float(time):
             return self.rows[-1]
+        t0 = _time.perf_counter()
         X = arrays.positions(self.engine)
         apex, radius = cone(self.X0, X, self.centre, self.direction, self.w_threshold)
         eps, live = arrays.strains(self.engine), arrays.alive(self.engine)
@@ -168,6 +171,7 @@ class BackFace:
             sf = max(sf, strain_front(X, eps[el] * live[el], first, self.centre, self.direction, self.strain_threshold))
         row = {'time': float(time), 'apex': apex, 'base_radius': radius, 'transverse_front': front, 'strain_front': sf}
         self.rows.append(row)
+        self.seconds += _time.perf_counter() - t0
         return row
 
     def series(self):
@@ -229,7 +233,8 @@ def compare(bf, t_proj, v_proj, reach, half_side, E, rho, t_max=None, tolerance=
                 'transverse_front_speed': ft['speed'], 'base_radius_speed': fits['base_radius']['speed'],
                 'fits': fits, 'fit_window_radii': [lo, hi], 'first_contact_time': t_c, 'mass_ratio': kappa, 'V_at_transverse_window': V,
                 'yarns_through_impact_point': [int(y) for y in bf.yarns],
-                'w_threshold': bf.w_threshold, 'strain_threshold': bf.strain_threshold}
+                'w_threshold': bf.w_threshold, 'strain_threshold': bf.strain_threshold,
+                'samples': len(s['time']), 'seconds': getattr(bf, 'seconds', 0.0)}
     reference = {'longitudinal_wave_speed_c': c, 'membrane_wave_speed_c_over_sqrt_kappa': c / math.sqrt(kappa),
                  'smith_fabric_U_E': fabric['U_E'], 'smith_fabric_strain': fabric['strain'],
                  'smith_yarn_U_E': yarn['U_E'], 'smith_yarn_strain': yarn['strain'],
