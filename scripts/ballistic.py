@@ -320,6 +320,8 @@ with atomic_open(os.path.join(d, 'breaks.csv')) as f:
 
 cp_steps = eng.n_elements * O.iter
 phases = {k[8:]: stats[k] for k in stats if k.startswith('seconds_')}
+if bf is not None:
+    phases['backface'] = bf.seconds  # the back-face measures, inside the run's wall time
 phases['integration_and_rest'] = max(0.0, wall - sum(phases.values()))
 measured = {
     'outcome': state['outcome'], 'perforated': perforated,

@@ -234,7 +234,7 @@ def compare(bf, t_proj, v_proj, reach, half_side, E, rho, t_max=None, tolerance=
                 'fits': fits, 'fit_window_radii': [lo, hi], 'first_contact_time': t_c, 'mass_ratio': kappa, 'V_at_transverse_window': V,
                 'yarns_through_impact_point': [int(y) for y in bf.yarns],
                 'w_threshold': bf.w_threshold, 'strain_threshold': bf.strain_threshold,
-                'samples': len(s['time']), 'seconds': getattr(bf, 'seconds', 0.0)}
+                'samples': len(s['time'])}
     reference = {'longitudinal_wave_speed_c': c, 'membrane_wave_speed_c_over_sqrt_kappa': c / math.sqrt(kappa),
                  'smith_fabric_U_E': fabric['U_E'], 'smith_fabric_strain': fabric['strain'],
                  'smith_yarn_U_E': yarn['U_E'], 'smith_yarn_strain': yarn['strain'],

@@ -18,7 +18,7 @@ SCENE = 'side=0.00635 size=2e-3 mass=0.2e-3 samples=10 clear_steps=20 energy_lim
 KEYS = ['velocities=40,50,55,60,65,70,80,100', 'seeds=1,2,3,4,5', 'weibull_m=3', 't_end=6e-5',
         'scene=%s' % SCENE, 'boot=100']
 N_RUNS = 40
-TIMING = ('wall_seconds', 'cpu_seconds', 'cp_steps_per_second', 'phase_seconds', 'mirror_seconds')
+TIMING = ('wall_seconds', 'cpu_seconds', 'cp_steps_per_second', 'phase_seconds', 'mirror_seconds', 'pictures_seconds')
 
 
 def campaign_cmd(out, *extra):
