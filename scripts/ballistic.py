@@ -134,6 +134,8 @@ if p.vtk_every < -1:
 if p.mirror_every < 0:
     bad('mirror_every', '0 (off) or a step count')
 woven.contact.check_friction(p)
+if p.model == 'yade' and p.body_friction > 0:  # woven.yade_grid gives the projectile a frictionless material
+    bad('body_friction', "0 with model = 'yade' (its projectile-yarn contacts are frictionless); [0, 2] with model = 'woven'")
 if not (math.isfinite(p.backface_w) and 0 < p.backface_w <= 1e-3):
     bad('backface_w', '(0, 1e-3] m')
 if not (math.isfinite(p.backface_strain) and 0 < p.backface_strain <= 0.1):

@@ -136,6 +136,7 @@ def test_picture_is_written_and_shows_strain_and_broken_ends(tmp_path):
 @pytest.mark.parametrize('arg, key', [('friction=-0.1', 'friction'), ('friction=2.5', 'friction'),
                                       ('body_friction=3', 'body_friction'), ('body_friction=nan', 'body_friction'),
                                       ('body_friction=0.2 response=penalty', 'body_friction'),
+                                      ('body_friction=0.2 model=yade', 'body_friction'),
                                       ('backface_w=0', 'backface_w'), ('backface_strain=0.5', 'backface_strain'),
                                       ('pictures=-1', 'pictures'), ('front_tolerance=0', 'front_tolerance')])
 def test_ballistic_refuses_bad_friction_and_backface_keys(tmp_path, arg, key):
