@@ -124,7 +124,7 @@ bp::dict energyDict(FabricEngine& e) {
   const EnergyBooks b = e.dynamics().energy();
   bp::dict d;
   d["kinetic"] = b.kinetic, d["elastic"] = b.elastic, d["damped"] = b.damped, d["work"] = b.work;
-  d["initial"] = b.initial, d["contact"] = b.contact, d["contact_input"] = b.contactInput;
+  d["initial"] = b.initial, d["contact"] = b.contact, d["friction"] = b.friction, d["contact_input"] = b.contactInput;
   d["released"] = b.released, d["body_work"] = b.bodyWork, d["spring"] = b.spring, d["projection"] = b.projection;
   d["balance_error"] = b.balanceError();
   return d;
@@ -170,7 +170,7 @@ void setCheckpointInterval(FabricEngine& e, long k) {
 bool isKinematic(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.dynamics().isKinematic(i); }
 
 // --- collisions ---
-void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real mcd, const std::string& rule, Real margin,
+void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real bodyFriction, Real mcd, const std::string& rule, Real margin,
                         Real tolerance, int maxIterations, int flattenPasses, Real positionCorrection,
                         Real correctionSlop, Index selfExclude, const std::string& broad, Real skin, int threads,
                         bool yarnContacts, Real cacheDistance, const std::string& response, Real penaltyStiffness,
@@ -179,7 +179,7 @@ void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real m
   ContactParams p;
   p.model = contactModelByName(model), p.projectionSweeps = projectionSweeps, p.projectionSlop = projectionSlop;
   p.projectionMaxMove = projectionMaxMove;
-  p.restitution = restitution, p.friction = friction, p.mcd = mcd, p.rule = sectionRuleByName(rule);
+  p.restitution = restitution, p.friction = friction, p.bodyFriction = bodyFriction, p.mcd = mcd, p.rule = sectionRuleByName(rule);
   p.margin = margin, p.tolerance = tolerance, p.maxIterations = maxIterations, p.flattenPasses = flattenPasses;
   p.positionCorrection = positionCorrection, p.correctionSlop = correctionSlop, p.selfExclude = selfExclude;
   p.skin = skin, p.threads = threads, p.yarnContacts = yarnContacts, p.cacheDistance = cacheDistance;
@@ -523,7 +523,7 @@ BOOST_PYTHON_MODULE(_woven) {
                     +[](FabricEngine& e, Real t) { e.dynamics().setVelocityRamp(t); },
                     "prescribed velocities grow linearly over this time from t = 0 [s] (0: at once)")
       .def("enable_collisions", &enableCollisionsPy,
-           (bp::arg("restitution") = 0.0, bp::arg("friction") = 0.0, bp::arg("mcd") = 0.6,
+           (bp::arg("restitution") = 0.0, bp::arg("friction") = 0.0, bp::arg("body_friction") = 0.0, bp::arg("mcd") = 0.6,
             bp::arg("section_rule") = "constant_area", bp::arg("margin") = 1e-6, bp::arg("tolerance") = 1e-6,
             bp::arg("max_iterations") = 50, bp::arg("flatten_passes") = 4, bp::arg("position_correction") = 0.2,
             bp::arg("correction_slop") = 0.5e-6, bp::arg("self_exclude") = 1, bp::arg("broad_phase") = "tree",
@@ -531,7 +531,8 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("response") = "impulse", bp::arg("penalty_stiffness") = 1e5, bp::arg("penalty_damping") = 0.0,
             bp::arg("flattening") = "geometric", bp::arg("section_stiffness") = 1e4, bp::arg("contact_model") = "gap",
             bp::arg("projection_sweeps") = -1, bp::arg("projection_slop") = 0.5e-6, bp::arg("projection_max_move") = 10e-6),
-           "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction >= 0, mcd in (0, 1), "
+           "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction (yarn-yarn) and body_friction "
+           "(rigid body-yarn) in [0, 2], 0 with response 'penalty', mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
            "in [0, 1] per step, correction_slop [m], broad_phase 'tree', 'grid' or 'sap', skin [m] >= 0 (Verlet skin of "
            "the broad phase), threads in [0, 64] (collision stage; 0: woven.threads(); same results for any count), yarn_contacts (False: only "

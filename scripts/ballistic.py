@@ -13,6 +13,7 @@
 # vtk/frames.pvd with yarn tubes and the projectile every vtk_every steps, summary.json.
 import math
 import os
+import subprocess
 import sys
 import time
 
@@ -26,6 +27,9 @@ from woven.weave import WEAVE_KEYS
 from woven.contact import CONTACT_KEYS
 from yade import plot, utils
 import woven.ballistic
+import woven.contact
+import woven.backface
+import woven.render
 from woven.overlap import OverlapMeter
 import woven.overlap
 import woven.yade_grid
@@ -83,6 +87,17 @@ defaults.update({
     'overlap_limit': (0.1, '', 'allowed largest overlap until the first break / yarn thickness (contact_model=gap)'),
     'out': ('', '', 'output folder (default out/ballistic)'),
     'model': ('woven', '', "'woven', or 'yade': the same ply in YADE's grid elements (woven.yade_grid, docs/yade_grid.md)"),
+    # Back-face deformation (woven.backface, docs/ballistic.md): measured at every sample.
+    'backface': (True, '', 'measure the back-face deformation (cone apex depth, base radius, fronts) at every sample'),
+    # Twice the largest out-of-plane move of decrimping (KM2 706: crimp height 0.1 mm, nodes +-0.05 mm),
+    # which the longitudinal wave brings ahead of the transverse front (measured: 10 um let it through).
+    'backface_w': (1e-4, 'm', 'out-of-plane displacement that counts as moved (cone base radius, transverse front), in (0, 1e-3]'),
+    'backface_strain': (5e-4, '', 'strain that counts as reached by the longitudinal wave, in (0, 0.1]'),
+    # Measured: 5.0 / 6.6 % (transverse / strain front) at 200 m/s, 0.9 / 1.8 % at 400 m/s; the bare
+    # yarn's Smith is 25-27 % off, the membrane's c/sqrt(2) 13-17 % (docs/ballistic.md).
+    'front_tolerance': (0.1, '', 'allowed |measured / theory - 1| of the early front speeds, in (0, 10]'),
+    'pictures': (5, '', 'pictures of the deformed pack rendered with VTK: at t_end k / N (k < N) and at the end (for '
+                 'the default run 20, 40, 60 us and the perforation), N in [0, 100]; 0: none'),
 })
 defaults.update(woven.yade_grid.GRID_KEYS)
 p = read_params(defaults)
@@ -125,6 +140,17 @@ if p.vtk_every < -1:
     bad('vtk_every', '-1 (none), 0 (first and last) or a step count')
 if p.mirror_every < 0:
     bad('mirror_every', '0 (off) or a step count')
+woven.contact.check_friction(p)
+if p.model == 'yade' and p.body_friction > 0:  # woven.yade_grid gives the projectile a frictionless material
+    bad('body_friction', "0 with model = 'yade' (its projectile-yarn contacts are frictionless); [0, 2] with model = 'woven'")
+if not (math.isfinite(p.backface_w) and 0 < p.backface_w <= 1e-3):
+    bad('backface_w', '(0, 1e-3] m')
+if not (math.isfinite(p.backface_strain) and 0 < p.backface_strain <= 0.1):
+    bad('backface_strain', '(0, 0.1]')
+if not (math.isfinite(p.front_tolerance) and 0 < p.front_tolerance <= 10):
+    bad('front_tolerance', '(0, 10]')
+if not (0 <= p.pictures <= 100):
+    bad('pictures', '[0, 100] (0: none)')
 if not (math.isfinite(p.fine_radius)):
     bad('fine_radius', '[0, inf) m (0: from the transverse wave), or < 0 for uniform cp_per_span')
 if p.fine_radius >= 0 and not (1 <= p.cp_coarse <= p.cp_per_span):
@@ -189,16 +215,18 @@ def sample():
     ke_p = 0.5 * p.mass * proj.state.vel.squaredNorm()
     dissipated = E['contact']
     row = dict(t=O.time, vz=vz, z=proj.state.pos[2], ke_projectile=ke_p, ke_fabric=E['kinetic'], elastic=E['elastic'],
-               dissipated_impulses=dissipated, damped=E['damped'], released=E['released'],
+               dissipated_impulses=dissipated, friction=E['friction'], damped=E['damped'], released=E['released'],
                contacts=s['contacts'], body_contacts=s['body_contacts'], broken=eng.broken_elements,
                projection=E['projection'], overlap=s['penetration'], body_overlap=s['body_penetration'],
-               balance=(ke_p + E['kinetic'] + E['elastic'] + E['damped'] + dissipated + E['released'] + E['spring']
+               balance=(ke_p + E['kinetic'] + E['elastic'] + E['damped'] + dissipated + E['friction'] + E['released'] + E['spring']
                         + E['projection'] - KE0 - E['initial'] - (E['work'] - E['body_work'])) / KE0)
     rows.append(row)
     plot.addData(**row)
     finer = guard.check(row['balance'])
     if finer > 1:  # as many rows per simulated time as before
         sampler.iterPeriod = max(1, int(round(sampler.iterPeriod * finer)))
+    if bf is not None:
+        bf.measure(O.time)
 
 
 meter = OverlapMeter(eng, thickness)
@@ -237,6 +265,10 @@ def watch():
               % (O.time * 1e6, p.t_end * 1e6, proj.state.vel[2], s['contacts'], s['body_contacts'],
                  eng.broken_elements, time.time() - state['wall0']))
         sys.stdout.flush()
+    if shots is not None:
+        shots.due(O.time)
+    if bf is not None and bf.dense():
+        bf.measure(O.time)
     if (p.stop and state['outcome'] != 'running') or O.time + O.dt >= p.t_end * (1 - 1e-12):
         O.pause()
 
@@ -246,6 +278,11 @@ if p.vtk_every >= 0:
     from woven.vtk_output import Recorder
     vtk_rec = Recorder(os.path.join(d, 'vtk'), eng, rings=p.vtk_rings)
     vtk_rec.write(0.0)
+
+
+bf = woven.backface.BackFace(w, X0, ply.centre, (0, 0, -1), p.backface_w, p.backface_strain,
+                             dense_radius=0.4 * min(np.ptp(X0[:, 0]), np.ptp(X0[:, 1]))) if p.backface else None
+shots = woven.render.Pictures(eng, d, p.t_end, p.pictures, p.vtk_rings) if p.pictures > 0 else None
 
 
 def vtk_frame():
@@ -297,6 +334,8 @@ with atomic_open(os.path.join(d, 'breaks.csv')) as f:
 
 cp_steps = eng.n_elements * O.iter
 phases = {k[8:]: stats[k] for k in stats if k.startswith('seconds_')}
+if bf is not None:
+    phases['backface'] = bf.seconds  # the back-face measures, inside the run's wall time
 phases['integration_and_rest'] = max(0.0, wall - sum(phases.values()))
 measured = {
     'outcome': state['outcome'], 'perforated': perforated,
@@ -310,7 +349,7 @@ measured = {
     'wall_seconds': wall, 'cpu_seconds': cpu, 'cp_steps_per_second': cp_steps / wall if wall > 0 else None,
     'phase_seconds': phases, 'mirror_seconds': state['mirror_seconds'],
     'energy': {'projectile_initial': KE0, 'projectile_final': ke_p, 'fabric_kinetic': E['kinetic'],
-               'fabric_elastic': E['elastic'], 'dissipated_impulses': E['contact'], 'damped': E['damped'],
+               'fabric_elastic': E['elastic'], 'dissipated_impulses': E['contact'], 'friction': E['friction'], 'damped': E['damped'],
                'released_breakage': E['released'], 'fabric_initial': fabric_initial,
                'projection': E['projection']},
     'max_body_penetration': stats['max_body_penetration'], 'max_yarn_penetration': stats['max_penetration'],
@@ -327,7 +366,8 @@ reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-referen
 units = {'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
          'simulated_time': 's', 'dt': 's', 'fine_radius': 'm', 'wall_seconds': 's', 'cpu_seconds': 's', 'cp_steps_per_second': '1/s', 'phase_seconds': 's',
          'energy': 'J', 'energy_balance_error': 'fraction of the projectile\'s initial kinetic energy',
-         'max_body_penetration': 'm', 'max_yarn_penetration': 'm', 'overlap': woven.overlap.UNITS, 'yarn_thickness': 'm', 'first_break_time': 's', 'mirror_seconds': 's'}
+         'max_body_penetration': 'm', 'max_yarn_penetration': 'm', 'overlap': woven.overlap.UNITS, 'yarn_thickness': 'm', 'first_break_time': 's', 'mirror_seconds': 's',
+         'pictures_seconds': 's'}
 checks = {'energy_balance': {'value': balance, 'limit': p.energy_limit, 'passed': bool(abs(balance) <= p.energy_limit),
                              'what': '(final kinetic + elastic + dissipated + released - initial) / initial kinetic energy'},
           'momentum_direction': {'value': v_res, 'limit': p.V, 'passed': bool(v_res <= p.V * (1 + 1e-9)),
@@ -341,6 +381,30 @@ if p.contact_model == 'gap':  # the paper's response lets yarns into each other:
                          'what': 'largest yarn-yarn and projectile-yarn overlap after flattening, until the first '
                                  'broken element, / yarn thickness'}
 
+if bf is not None:
+    S_t, S_v = np.array([r['t'] for r in rows]), np.array([r['vz'] for r in rows])
+    bf_m, bf_r, bf_c = woven.backface.compare(bf, S_t, S_v, half,
+                                              0.5 * min(np.ptp(X0[:, 0]), np.ptp(X0[:, 1])), info['E'], info['rho'],
+                                              t_max=log[0]['time'] if log else None, tolerance=p.front_tolerance,
+                                              friction=p.friction)
+    measured['backface'], reference['backface'] = bf_m, bf_r
+    units['backface'] = dict(woven.backface.UNITS, apex_depth_end='m', base_radius_end='m', strain_front_speed='m/s',
+                             transverse_front_speed='m/s', base_radius_speed='m/s')
+    checks.update(bf_c)
+    woven.backface.write_series(bf, os.path.join(d, 'backface.csv'))
+    woven.backface.chart(bf, os.path.join(d, 'backface.png'), bf_m, bf_r,
+                         '%s %.3g g at %.0f m/s' % (p.shape, p.mass * 1e3, p.V))
+if shots is not None:
+    try:  # a picture that cannot be rendered fails the run's check, not the run
+        t_pic = time.time()
+        measured['pictures'] = shots.finish(O.time, p.break_strain or info['failure_strain'])
+        measured['pictures_seconds'] = time.time() - t_pic
+        checks['pictures'] = {'value': len(measured['pictures']), 'limit': p.pictures, 'passed': True,
+                              'what': 'pictures of the deformed pack written'}
+    except (RuntimeError, OSError, subprocess.TimeoutExpired) as ex:
+        print('ballistic: pictures failed:', ex)
+        checks['pictures'] = {'value': 0, 'limit': p.pictures, 'passed': False, 'what': 'pictures written: %s' % ex}
+
 import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt
@@ -351,7 +415,8 @@ ax[0, 0].plot(t_us, -S[:, col['vz']], 'k-')
 ax[0, 0].set_ylabel('projectile velocity [m/s]')
 ax[0, 0].set_title('%s %.3g g at %.0f m/s: %s' % (p.shape, p.mass * 1e3, p.V, state['outcome']))
 for k, lab in (('ke_projectile', 'projectile kinetic'), ('ke_fabric', 'fabric kinetic'), ('elastic', 'fabric elastic'),
-               ('dissipated_impulses', 'dissipated by impulses'), ('released', 'released by breakage')):
+               ('dissipated_impulses', 'dissipated by impulses'), ('friction', 'work of friction'),
+               ('released', 'released by breakage')):
     ax[0, 1].plot(t_us, S[:, col[k]], label=lab)
 ax[0, 1].set_ylabel('energy [J]')
 ax[0, 1].legend(fontsize=8)

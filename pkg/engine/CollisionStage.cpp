@@ -526,6 +526,7 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   if (!penalty) {
     law_.resolve(f, contacts_, capacityOf(f), dt, params_, stats.impulses, bodyContacts_, &bodies);
     bodyWork_ += stats.impulses.bodyWork;
+    frictionWork_ += stats.impulses.frictionWork;
     added += stats.impulses.energyChange;
   }
   // Force-based parts (law/NormalForces): penalty springs on the overlaps left after flattening,

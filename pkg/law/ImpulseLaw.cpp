@@ -137,7 +137,15 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   dt_ = dt;
   keepVelocities(f);
 
-  rep.iterations = solve(f, p, p.friction > 0);
+  const bool friction = p.friction > 0 || p.bodyFriction > 0;
+  if (friction)
+    for (Row& r : rows_) {
+      r.kick.setZero();
+      for (int k = 0; k < 4; ++k) r.kick += (0.5 * dt * r.w[k] * f.invMass[r.node[k]]) * f.force[r.node[k]];
+    }
+  frictionTaken_ = 0;
+  rep.iterations = solve(f, p, friction);
+  rep.frictionWork = frictionTaken_;
   for (const Row& r : rows_) {
     const Real vn = rowVelocity(f, r).dot(r.n);
     const Real miss = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
@@ -182,15 +190,20 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
       const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
       Vec3 J = (lambda - r.lambda) * r.n;
       r.lambda = lambda;
-      if (friction) {  // Coulomb: cancel the tangential slip, within the cone mu * lambda
+      const Real mu = r.body >= 0 ? p.bodyFriction : p.friction;
+      Vec3 Jt = Vec3::Zero();
+      if (friction && mu > 0) {  // Coulomb: cancel the tangential slip, within the cone mu * lambda
         const Vec3 vt = vr - vn * r.n;
         Vec3 lt = r.lambdaT - vt * r.invK;
-        const Real lim = p.friction * r.lambda, len = lt.norm();
+        const Real lim = mu * r.lambda, len = lt.norm();
         if (len > lim) lt *= lim / len;
-        J += lt - r.lambdaT;
+        Jt = lt - r.lambdaT;
+        J += Jt;
         r.lambdaT = lt;
       }
       applyRow(f, r, J);
+      if (friction && mu > 0)  // the tangential part's share of this update's energy (see the header)
+        frictionTaken_ -= Jt.dot(0.5 * (vr + rowVelocity(f, r)) - r.kick);
     }
     if (worst <= p.tolerance) return it + 1;
   }
