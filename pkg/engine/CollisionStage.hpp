@@ -151,11 +151,10 @@ class CollisionStage : public StepHook {
   struct PairMemo {
     bool memo = false, side = false;
     // Its contact points at the last narrow phase that measured it (1 or 2; 0: measure forgotten,
-    // the pair was not measured since its boxes parted): their places sA, sB and anchors, the
-    // normal and the sections' measure hA + hB [m] at each.
+    // the pair was not measured since its boxes parted): their places sA, sB, the normal and the
+    // sections' measure hA + hB [m] at each.
     int memoPoints = 0;
     Real memoS[2] = {0, 0}, memoT[2] = {0, 0}, memoMeasure[2] = {0, 0};
-    SideAnchor memoAnchor[2] = {SideAnchor::A, SideAnchor::A};
     Vec3 memoNormal[2] = {Vec3::Zero(), Vec3::Zero()};
   };
   // A pair's last static contact (model Paper, contact_cache > 0: ContactParams::cacheDistance).
