@@ -1,4 +1,5 @@
 #include "geom/GapFunction.hpp"
+#include "shape/Cylinder.hpp"
 #include "bound/CPBound.hpp"
 #include "geom/SegmentDistance.hpp"
 #include <algorithm>
@@ -329,6 +330,52 @@ void nodeFrame(const Fabric& f, Index k, const Vec3& t, SectionRule rule, Vec3& 
   ax = semiAxes(f.secRadius[k], f.secFlat[k], rule);
 }
 
+// Cylinder form (the box form's separating plane, shape/Cylinder.hpp): g_k = min over the part of
+// y.n - (x_k.n + support_k(n)), n held in the part frame for the step. n is the candidate direction
+// (cylinderDirections of either end node) that leaves the CP the most room, each end section's
+// support capped by the measure memory as on a box face.
+Real cylinderGapAt(const Fabric& f, Index cp, const RigidBody& body, int part, const Vec3& n, const Vec3& local,
+                   const BodyContact& h, int node) {
+  const Real partMin = body.partCentre(part).dot(n) + cylinderMinAlong(body.parts[part], local);
+  return partMin - (f.pos[f.elem0[cp] + node].dot(n) + h.support[node]);
+}
+
+template <class Listed>
+int cylinderGap(const Fabric& f, Index cp, const RigidBody& body, int part, SectionRule rule, BodyContact c,
+                BodyContact out[2], const Vec3Array* tangent, const BodyContact* held, const Listed& listed) {
+  const Index i = f.elem0[cp];
+  const Mat3 A = body.partAxes(part);
+  const Vec3 centre = body.partCentre(part);
+  Vec3 u[2], d[2];
+  SemiAxes ax[2];
+  for (int k = 0; k < 2; ++k) nodeFrame(f, i + k, yarnTangent(f, cp, k, tangent), rule, u[k], d[k], ax[k]);
+  Vec3 dirs[12];
+  int nd = 0;
+  for (int k = 0; k < 2; ++k) nd += cylinderDirections(body.parts[part], A.transpose() * (f.pos[i + k] - centre), dirs + nd);
+  Real best = -INFINITY;
+  for (int j = 0; j < nd; ++j) {
+    const Vec3 local = dirs[j], n = A * local;
+    const bool sameFace = held && held->localNormal.dot(local) > 0.999;
+    const Real partMin = centre.dot(n) + cylinderMinAlong(body.parts[part], local);
+    BodyContact h;
+    for (int k = 0; k < 2; ++k) {
+      const Real room = partMin - f.pos[i + k].dot(n);
+      h.support[k] = std::min(ellipseSupport(u[k], d[k], ax[k].a, ax[k].b, n),
+                              std::max(sameFace ? held->support[k] : ax[k].b, room));
+    }
+    const Real g = std::min(cylinderGapAt(f, cp, body, part, n, local, h, 0), cylinderGapAt(f, cp, body, part, n, local, h, 1));
+    if (g > best) best = g, c.normal = n, c.localNormal = local, c.support[0] = h.support[0], c.support[1] = h.support[1];
+  }
+  int count = 0;
+  for (int k = 0; k < 2; ++k) {
+    c.s = k;
+    c.gap = cylinderGapAt(f, cp, body, part, c.normal, c.localNormal, c, k);
+    c.point = f.pos[i + k] + c.support[k] * c.normal;
+    if (listed(c)) out[count++] = c;
+  }
+  return count;
+}
+
 }  // namespace
 
 int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
@@ -360,6 +407,8 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
     out[0] = c;
     return 1;
   }
+  if (body.parts[part].type == RigidPart::Type::Cylinder)
+    return cylinderGap(f, cp, body, part, rule, c, out, tangent, held, listed);
   // The face of the box that leaves the CP the most room (the separating-axis choice among the
   // box's faces), then one contact per end section: a level CP under a face is held at both ends.
   const OBB box = body.partBox(part);
@@ -402,6 +451,13 @@ void remeasureBody(const Fabric& f, const RigidBody& body, BodyContact& c) {
     Vec3 P;
     c.gap = sphereGapAt(f.pos[i], f.pos[i + 1], body.partCentre(c.part), body.parts[c.part].radius, c, c.s, c.normal, P);
     c.point = P;
+    return;
+  }
+  if (body.parts[c.part].type == RigidPart::Type::Cylinder) {
+    c.normal = body.partAxes(c.part) * c.localNormal;
+    const int node = c.s > 0.5 ? 1 : 0;
+    c.gap = cylinderGapAt(f, c.cp, body, c.part, c.normal, c.localNormal, c, node);
+    c.point = f.pos[i + node] + c.support[node] * c.normal;
     return;
   }
   const OBB box = body.partBox(c.part);
