@@ -331,9 +331,10 @@ void nodeFrame(const Fabric& f, Index k, const Vec3& t, SectionRule rule, Vec3& 
 }
 
 // Cylinder form (the box form's separating plane, shape/Cylinder.hpp): g_k = min over the part of
-// y.n - (x_k.n + support_k(n)), n held in the part frame for the step. n is the candidate direction
-// (cylinderDirections of either end node) that leaves the CP the most room, each end section's
-// support capped by the measure memory as on a box face.
+// y.n_k - (x_k.n_k + support_k(n_k)), n_k held in the part frame for the step. Each end section k
+// takes the candidate direction (cylinderDirections of either end node) that leaves it the most
+// room, its support capped by the measure memory as on a box face: for a circular section that is
+// its distance to the cylinder minus its radius, exactly (the round surface has no face to share).
 Real cylinderGapAt(const Fabric& f, Index cp, const RigidBody& body, int part, const Vec3& n, const Vec3& local,
                    const BodyContact& h, int node) {
   const Real partMin = body.partCentre(part).dot(n) + cylinderMinAlong(body.parts[part], local);
@@ -346,30 +347,28 @@ int cylinderGap(const Fabric& f, Index cp, const RigidBody& body, int part, Sect
   const Index i = f.elem0[cp];
   const Mat3 A = body.partAxes(part);
   const Vec3 centre = body.partCentre(part);
-  Vec3 u[2], d[2];
-  SemiAxes ax[2];
-  for (int k = 0; k < 2; ++k) nodeFrame(f, i + k, yarnTangent(f, cp, k, tangent), rule, u[k], d[k], ax[k]);
   Vec3 dirs[12];
   int nd = 0;
   for (int k = 0; k < 2; ++k) nd += cylinderDirections(body.parts[part], A.transpose() * (f.pos[i + k] - centre), dirs + nd);
-  Real best = -INFINITY;
-  for (int j = 0; j < nd; ++j) {
-    const Vec3 local = dirs[j], n = A * local;
-    const bool sameFace = held && held->localNormal.dot(local) > 0.999;
-    const Real partMin = centre.dot(n) + cylinderMinAlong(body.parts[part], local);
-    BodyContact h;
-    for (int k = 0; k < 2; ++k) {
-      const Real room = partMin - f.pos[i + k].dot(n);
-      h.support[k] = std::min(ellipseSupport(u[k], d[k], ax[k].a, ax[k].b, n),
-                              std::max(sameFace ? held->support[k] : ax[k].b, room));
-    }
-    const Real g = std::min(cylinderGapAt(f, cp, body, part, n, local, h, 0), cylinderGapAt(f, cp, body, part, n, local, h, 1));
-    if (g > best) best = g, c.normal = n, c.localNormal = local, c.support[0] = h.support[0], c.support[1] = h.support[1];
-  }
   int count = 0;
   for (int k = 0; k < 2; ++k) {
+    Vec3 u, d;
+    SemiAxes ax;
+    nodeFrame(f, i + k, yarnTangent(f, cp, k, tangent), rule, u, d, ax);
+    const bool heldHere = held && held->s == k;
+    Real best = -INFINITY;
+    for (int j = 0; j < nd; ++j) {
+      const Vec3 local = dirs[j], n = A * local;
+      const bool sameFace = heldHere && held->localNormal.dot(local) > 0.999;
+      const Real partMin = centre.dot(n) + cylinderMinAlong(body.parts[part], local);
+      const Real room = partMin - f.pos[i + k].dot(n);
+      const Real support = std::min(ellipseSupport(u, d, ax.a, ax.b, n), std::max(sameFace ? held->support[k] : ax.b, room));
+      const Real g = room - support;
+      if (g > best) best = g, c.normal = n, c.localNormal = local, c.support[k] = support;
+    }
     c.s = k;
-    c.gap = cylinderGapAt(f, cp, body, part, c.normal, c.localNormal, c, k);
+    c.support[1 - k] = 0;
+    c.gap = best;
     c.point = f.pos[i + k] + c.support[k] * c.normal;
     if (listed(c)) out[count++] = c;
   }
