@@ -67,10 +67,10 @@ defaults.update({
     'V': (200.0, 'm/s', 'impact speed, normal to the ply'),
     'shape': ('box', '', "'box' (a cube, face on, as the paper's OBB-bounded projectile), 'sphere', 'rcc' (0.22-calibre "
               "right circular cylinder) or 'fsp' (17-grain 0.22-calibre fragment simulator, chisel nose): woven.projectiles"),
-    'mass': (0.0, 'kg', 'projectile mass, (0, 10] kg; 0: from the shape (box, sphere: 1.1e-3, the 17-grain FSP\'s mass; '
-             'rcc, fsp: density x the exact solid\'s volume)'),
-    'size': (0.0, 'm', 'cube edge, sphere or rcc diameter, [1e-4, 0.1] m; 0: from the shape (box, sphere: 5.59e-3; rcc: '
-             '5.588e-3, its length equal; fsp: its drawing, size must be 0)'),
+    'mass': (1.1e-3, 'kg', 'projectile mass, (0, 10] kg (default: a 0.22-calibre, 17-grain fragment simulator); rcc and '
+             'fsp when not given: density x the exact solid\'s volume'),
+    'size': (5.59e-3, 'm', 'cube edge or sphere diameter, [1e-4, 0.1] m (default: 0.22 calibre); rcc: its diameter = '
+             'length, 5.588e-3 when not given; fsp: fixed by its drawing (not to be given)'),
     'density': (7850.0, 'kg/m^3', 'rcc and fsp material density, [1000, 20000] (steel)'),
     'yaw': (0.0, 'deg', 'angle of the projectile\'s axis to its flight, in the plane of incidence, [-90, 90]'),
     'obliquity': (0.0, 'deg', 'angle of the flight to the ply\'s normal (towards +x), [0, 80]'),
@@ -106,12 +106,12 @@ if not (math.isfinite(p.V) and 0 < p.V <= 5000):
     bad('V', '(0, 5000] m/s, finite')
 if p.shape not in woven.ballistic.SHAPES:
     bad('shape', ', '.join(woven.ballistic.SHAPES))
-if not (math.isfinite(p.mass) and (0 < p.mass <= 10 or p.mass == 0)):
-    bad('mass', '(0, 10] kg, or 0 (from the shape)')
-if p.shape == 'fsp' and p.size != 0:
-    bad('size', '0 for shape fsp (its drawing fixes its size)')
-if not (math.isfinite(p.size) and (1e-4 <= p.size <= 0.1 or p.size == 0)):
-    bad('size', '[1e-4, 0.1] m, or 0 (from the shape)')
+if not (math.isfinite(p.mass) and 0 < p.mass <= 10):
+    bad('mass', '(0, 10] kg')
+if p.shape == 'fsp' and 'size' in p.given:
+    bad('size', 'not given for shape fsp (its drawing fixes its size)')
+if not (math.isfinite(p.size) and 1e-4 <= p.size <= 0.1):
+    bad('size', '[1e-4, 0.1] m')
 if not (math.isfinite(p.density) and 1000 <= p.density <= 20000):
     bad('density', '[1000, 20000] kg/m^3')
 if not (math.isfinite(p.yaw) and woven.ballistic.YAW_RANGE[0] <= p.yaw <= woven.ballistic.YAW_RANGE[1]):
@@ -123,12 +123,11 @@ if p.contact_model == 'paper' and p.shape in ('rcc', 'fsp'):
 # The projectile: the standard solids' dimensions and mass (woven.projectiles), or a cube / sphere.
 solid = None
 if p.shape in ('rcc', 'fsp'):
-    solid = woven.projectiles.solid(p.shape, p.size, p.density)
+    solid = woven.projectiles.solid(p.shape, p.size if 'size' in p.given else 0.0, p.density)
     size = 2 * solid['radius']
-    mass = p.mass or solid['mass']
+    mass = p.mass if 'mass' in p.given else solid['mass']
 else:
-    size = p.size or 5.59e-3
-    mass = p.mass or 1.1e-3
+    size, mass = p.size, p.mass
 if not (math.isfinite(p.side) and 1e-3 <= p.side <= 1):
     bad('side', '[1e-3, 1] m (and at most %d nodes in the ply: woven.ballistic.build_ply)' % woven._woven.MAX_WEAVE_NODES)
 if p.clamp not in (0, 2, 4):
