@@ -376,15 +376,16 @@ if solid is not None:
     measured['projectile']['solid_mass'] = solid['mass']
 if pk is not None:
     books = woven.pack.ply_books(eng, pk)
-    # The ply that stopped the projectile: the deepest ply it touched last (the plies above it are
-    # perforated or pushed aside; those below are pushed by the ply above, not by the projectile);
-    # none when it perforated the pack.
-    stopper = None if perforated or not state['touching'] else max(state['touching'])
+    # The ply that stopped the projectile: once it is arrested, the deepest ply it touches (the plies
+    # above it are perforated or pushed aside; those below are pushed by the ply above, not by the
+    # projectile); none when it perforated the pack or still moves on at t_end.
+    deepest = max(state['touching']) if state['touching'] else None
+    stopper = deepest if state['outcome'] == 'arrested' else None
     for k, b in enumerate(books):
         b['angle'] = pk.angles[k]
         b['touched_by_projectile'] = state['ply_touched'][k]
     measured['pack'] = {'plies': pk.plies, 'pitch': pk.pitch, 'start': pack_start, 'per_ply': books,
-                        'stopped_by_ply': stopper,
+                        'stopped_by_ply': stopper, 'deepest_ply_in_contact_at_end': deepest,
                         'shared': {'dissipated_impulses': E['contact'], 'damped': E['damped'],
                                    'projection': E['projection'], 'work_of_loads': E['work'] - E['body_work']},
                         'sum_absorbed_per_ply': sum(b['absorbed'] for b in books),
