@@ -352,6 +352,7 @@ phases['integration_and_rest'] = max(0.0, wall - sum(phases.values()))
 measured = {
     'outcome': state['outcome'], 'perforated': perforated,
     'residual_velocity': v_res if perforated else 0.0, 'projectile_velocity_end': v_res,
+    'projectile_speed_end': proj.state.vel.norm(),  # |v| (the velocities above are along -z: oblique flights)
     'absorbed_energy': absorbed, 'energy_balance_error': balance,
     'max_penetration': z_mid - state['min_nose'],
     'broken_elements': eng.broken_elements, 'broken_yarns': eng.broken_yarns,
@@ -396,7 +397,7 @@ reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-referen
              'smith_critical_velocity': woven.theory.smith_critical_velocity(p.break_strain or info['failure_strain'],
                                                                             info['E'], info['rho']),
              'failure_strain': p.break_strain or info['failure_strain']}
-units = {'projectile': 'kg, m, deg, kg m^2, kg/m^3, m^3, rad (chisel_angle)',
+units = {'projectile_speed_end': 'm/s', 'projectile': 'kg, m, deg, kg m^2, kg/m^3, m^3, rad (chisel_angle)',
          'pack': 'J, m, deg (per_ply: energies at the end of the run; shared: entries not split by ply)',
          'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
          'simulated_time': 's', 'dt': 's', 'fine_radius': 'm', 'wall_seconds': 's', 'cpu_seconds': 's', 'cp_steps_per_second': '1/s', 'phase_seconds': 's',
