@@ -53,7 +53,7 @@ defaults.update({
     # Measured on the default scene over 20 us (docs/ballistic.md): absorbed energy within 0.2 % of
     # the tension scene's contact settings (4 passes, 50 sweeps, 5 um skin), at 0.6x the wall time.
     'flatten_passes': (1, '', CONTACT_KEYS['flatten_passes'][2]),
-    'max_iterations': (10, '', CONTACT_KEYS['max_iterations'][2]),
+    'max_iterations': (10, '', CONTACT_KEYS['max_iterations'][2] + '; a pack takes this many per ply unless given'),
     'skin': (1e-5, 'm', CONTACT_KEYS['skin'][2]),
     # Same pairs as the tree; 100 us of the default scene in 69 s against 84 s (bench_ballistic.py).
     'broad_phase': ('grid', '', CONTACT_KEYS['broad_phase'][2]),
@@ -167,7 +167,13 @@ O.bodies.clear()
 weave_args = {k: p[k] for k in WEAVE_KEYS if k in p}
 if p.fine_radius == 0:
     weave_args['fine_radius'] = woven.ballistic.fine_radius_from_waves(weave_args, p.V, p.t_end, p.shape, size)
-ply = woven.ballistic.build_ply(weave_args, {k: p[k] for k in CONTACT_KEYS}, side=p.side,
+contact_args = {k: p[k] for k in CONTACT_KEYS}
+if p.plies > 1 and 'max_iterations' not in p.given:
+    # Gauss-Seidel carries a push one contact layer per sweep, and a pack stacks 2 yarn layers per ply
+    # between the projectile and the last ply: 10 sweeps per ply (docs/ballistic.md; 4 plies at 10
+    # sweeps let the projectile 0.48 thickness into the yarns and the projection put in 6 % of KE0).
+    contact_args['max_iterations'] = woven.pack.sweeps_for(p.plies, p.max_iterations)
+ply = woven.ballistic.build_ply(weave_args, contact_args, side=p.side,
                                 clamp=p.clamp, state=p.state,
                                 breakage=dict(strain=p.break_strain, filter_length=p.break_filter,
                                               weibull_m=p.weibull_m, seed=p.seed),
@@ -369,6 +375,7 @@ measured = {
     'settle_overlap': settle_left, 'yarn_thickness': thickness,
     'overlap': meter.summary(),
 }
+measured['max_iterations'] = contact_args['max_iterations']
 measured['projectile'] = {'shape': p.shape, 'mass': mass, 'size': size, 'yaw': p.yaw, 'obliquity': p.obliquity,
                           'inertia': list(proj.state.inertia), 'start_reach_below': low, 'start_reach_above': high}
 if solid is not None:
