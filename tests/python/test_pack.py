@@ -89,3 +89,23 @@ def test_cylinder_support_from_python():
     assert woven._woven.cylinder_min_along(R, H, 0.0, 0.0, n) == pytest.approx(-(R + H) / math.sqrt(2), rel=1e-14)
     with pytest.raises(ValueError, match='chisel_angle'):
         woven._woven.cylinder_min_along(R, H, 0.1, 0.0, n)  # flats that would run past the tail
+
+
+def test_yawed_oblique_fsp_on_a_pack(tmp_path):
+    # The FSP, 5 degrees of yaw, 30 degrees of obliquity, on 2 plies at 0/90: its flight and its
+    # lowest point at the start as asked, the contact limits and the books kept.
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.0127', 'plies=2', 'ply_angles=0,90', 'shape=fsp',
+                           'yaw=5', 'obliquity=30', 'V=300', 't_end=8e-6', 'stop=0', 'vtk_every=-1', 'progress=0',
+                           timeout=300)
+    assert rc == 0, log[-3000:]
+    m = s['measured']
+    import numpy as np
+    series = np.genfromtxt(tmp_path / 'series.csv', delimiter=',', names=True)
+    assert series['vz'][0] == pytest.approx(-300 * math.cos(math.radians(30)), rel=1e-9)
+    P = m['projectile']
+    assert P['shape'] == 'fsp' and P['mass'] == pytest.approx(1.1016e-3, rel=1e-4)
+    # nose first, turned by 35 degrees from -z: the chisel's tip corner is the lowest point
+    assert P['start_reach_below'] > P['half_length'] * math.cos(math.radians(35))
+    assert m['overlap']['yarn_max_before_break_rel'] <= 0.1 and m['overlap']['body_max_before_break_rel'] <= 0.1
+    assert abs(m['energy_balance_error']) <= 0.01
+    assert m['pack']['per_ply'][0]['touched_by_projectile']
