@@ -1,6 +1,8 @@
-# Ballistic impact of a rigid projectile on a single ply (paper Sec. 6.2), run inside YADE's loop.
-#   yade -n -x scripts/ballistic.py [V=200] [shape=box|sphere] [mass=1.1e-3] [size=5.59e-3] [side=0.0508]
-#                                   [clamp=4] [t_end=1e-4] [state=FILE] [vtk_every=N] [out=DIR] ...
+# Ballistic impact of a rigid projectile on a single ply (paper Sec. 6.2) or a pack, run inside YADE's loop.
+#   yade -n -x scripts/ballistic.py [V=200] [shape=box|sphere|rcc|fsp] [mass=1.1e-3] [size=5.59e-3] [side=0.0508]
+#                                   [clamp=4] [plies=1] [ply_gap=-1] [ply_angles=0,45] [yaw=0] [obliquity=0]
+#                                   [t_end=1e-4] [state=FILE] [vtk_every=N] [out=DIR] ...
+# Packs and the standard projectiles (RCC, FSP as exact cylinder parts): docs/ballistic.md.
 # The fabric (default KM2 style 706, a 50.8 x 50.8 mm single ply, clamped on its 4 edges) is built,
 # its sections settled; the projectile is an ordinary YADE body (a cube of edge `size` face on, or a
 # sphere of diameter `size`) coupled to the fabric (woven.coupling), `standoff` above its top surface,
@@ -157,6 +159,8 @@ if not (math.isfinite(p.fine_radius)):
     bad('fine_radius', '[0, inf) m (0: from the transverse wave), or < 0 for uniform cp_per_span')
 if p.fine_radius >= 0 and not (1 <= p.cp_coarse <= p.cp_per_span):
     bad('cp_coarse', '[1, cp_per_span = %d] CPs between crossings outside fine_radius' % p.cp_per_span)
+if p.model == 'yade' and (p.plies > 1 or any(ply_angles) or p.shape in ('rcc', 'fsp') or p.yaw or p.obliquity):
+    bad('model', "'woven' for packs, rcc, fsp, yaw and obliquity (model yade: one ply, a cube or a sphere, face on)")
 d = out_dir('ballistic', p)
 if p.model == 'yade':
     sys.exit(woven.yade_scenes.ballistic(p, d, [k for k in WEAVE_KEYS if k in p], CONTACT_KEYS))

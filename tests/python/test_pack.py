@@ -16,6 +16,7 @@ from conftest import run_scene
     (['shape=cylinder'], 'shape'), (['shape=fsp', 'size=5e-3'], 'size'), (['shape=rcc', 'density=0'], 'density'),
     (['shape=rcc', 'contact_model=paper'], 'shape'),
     (['plies=2', 'standoff=-1e-3'], 'standoff'),  # a projectile that starts inside the pack
+    (['model=yade', 'plies=2'], 'model'), (['model=yade', 'shape=rcc'], 'model'),
 ])
 def test_bad_pack_and_projectile_keys_name_the_key(tmp_path, args, key):
     rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', 'progress=0', *args, timeout=120)
