@@ -8,6 +8,7 @@
 #include "engine/FabricEngine.hpp"
 #include "engine/Snapshot.hpp"
 #include "geom/SeparatingAxis.hpp"
+#include "shape/Cylinder.hpp"
 #include "weave/WeaveBuilder.hpp"
 #include <memory>
 
@@ -247,7 +248,16 @@ RigidBody& bodyAt(FabricEngine& e, int k) {
   require(k >= 0 && k < static_cast<int>(b.size()), "index", k, "[0, " + fmt(static_cast<long>(b.size()) - 1) + "]");
   return b[k];
 }
-// parts: list of ('box', half_extents Vector3, offset Vector3, Quaternion) or ('sphere', radius, offset, Quaternion)
+// A cylinder's (radius, half_length, chisel_angle, land_half_width) from a Python sequence.
+Eigen::Matrix<Real, 4, 1> cylinderDims(bp::object d) {
+  require(bp::len(d) == 4, "parts", static_cast<Real>(bp::len(d)),
+          "a cylinder's (radius [m], half_length [m], chisel_angle [rad], land_half_width [m])");
+  Eigen::Matrix<Real, 4, 1> v;
+  for (int k = 0; k < 4; ++k) v[k] = bp::extract<Real>(d[k]);
+  return v;
+}
+// parts: list of ('box', half_extents Vector3, offset Vector3, Quaternion), ('sphere', radius, offset, Quaternion)
+// or ('cylinder', (radius, half_length, chisel_angle, land_half_width), offset, Quaternion)
 int addBody(FabricEngine& e, long id, bp::object parts, Real mass, const Vec3& inertia, const Vec3& pos, const Quat& ori,
             const Vec3& vel, const Vec3& angVel) {
   RigidBody b;
@@ -258,7 +268,14 @@ int addBody(FabricEngine& e, long id, bp::object parts, Real mass, const Vec3& i
     const std::string kind = bp::extract<std::string>(t[0]);
     if (kind == "box") p.type = RigidPart::Type::Box, p.halfSize = bp::extract<Vec3>(t[1]);
     else if (kind == "sphere") p.type = RigidPart::Type::Sphere, p.radius = bp::extract<Real>(t[1]);
-    else throw ParameterError("parts", "'" + kind + "'", "'box' or 'sphere' parts");
+    else if (kind == "cylinder") {
+      // ('cylinder', (radius, half_length, chisel_angle, land_half_width), offset, ori): axis z, nose +z.
+      p.type = RigidPart::Type::Cylinder;
+      const Eigen::Matrix<Real, 4, 1> dims = cylinderDims(t[1]);
+      p.radius = dims[0], p.halfLength = dims[1], p.chiselAngle = dims[2], p.landHalfWidth = dims[3];
+      require(bodyStage(e).params().model == ContactModel::Gap, "parts", 0,
+              "box or sphere parts with contact_model 'paper' (a cylinder has the gap model's form only)");
+    } else throw ParameterError("parts", "'" + kind + "'", "'box', 'sphere' or 'cylinder' parts");
     p.offset = bp::extract<Vec3>(t[2]);
     p.ori = bp::extract<Quat>(t[3]);
     b.parts.push_back(p);
@@ -443,6 +460,18 @@ BOOST_PYTHON_MODULE(_woven) {
           "Largest stable time step [s] of a penalty contact of effective mass m [kg] > 0 and stiffness k [N/m] > 0: "
           "2 sqrt(m / k).");
   bp::def("km2_706", &km2_706, "KM2 style 706 preset parameters.");
+  bp::def("cylinder_min_along", +[](Real radius, Real halfLength, Real chiselAngle, Real landHalfWidth, const Vec3& n) {
+            RigidPart p;
+            p.type = RigidPart::Type::Cylinder, p.radius = radius, p.halfLength = halfLength;
+            p.chiselAngle = chiselAngle, p.landHalfWidth = landHalfWidth;
+            require(std::isfinite(radius) && radius >= 1e-9 && radius <= 10, "radius", radius, "[1e-9, 10] m");
+            validateCylinder(p);
+            require(n.allFinite() && std::abs(n.norm() - 1) < 1e-9, "n", n.norm(), "a unit vector");
+            return cylinderMinAlong(p, n);
+          },
+          (bp::arg("radius"), bp::arg("half_length"), bp::arg("chisel_angle"), bp::arg("land_half_width"), bp::arg("n")),
+          "min over a cylinder part (axis z, centre at the origin; chisel nose at +z: shape/Cylinder.hpp) of y.n [m], "
+          "n a unit vector in its frame: exact.");
   bp::def("set_threads", +[](int n) {
             require(n >= 0 && n <= 1024, "threads", n, "[0, 1024] (0: follow OpenMP: OMP_NUM_THREADS, yade -j N)");
             setThreads(n);
@@ -589,7 +618,11 @@ BOOST_PYTHON_MODULE(_woven) {
           const Mat3 A = b.partAxes(i);
           bp::list rows;
           for (int r = 0; r < 3; ++r) rows.append(bp::make_tuple(A(r, 0), A(r, 1), A(r, 2)));
-          if (b.parts[i].type == RigidPart::Type::Box) out.append(bp::make_tuple("box", b.parts[i].halfSize, b.partCentre(i), rows));
+          const RigidPart& q = b.parts[i];
+          if (q.type == RigidPart::Type::Cylinder)
+            out.append(bp::make_tuple("cylinder", bp::make_tuple(q.radius, q.halfLength, q.chiselAngle, q.landHalfWidth),
+                                      b.partCentre(i), rows));
+          else if (q.type == RigidPart::Type::Box) out.append(bp::make_tuple("box", b.parts[i].halfSize, b.partCentre(i), rows));
           else out.append(bp::make_tuple("sphere", b.parts[i].radius, b.partCentre(i), rows));
         }
         return out;

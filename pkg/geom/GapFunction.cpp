@@ -1,4 +1,5 @@
 #include "geom/GapFunction.hpp"
+#include "shape/Cylinder.hpp"
 #include "bound/CPBound.hpp"
 #include "geom/SegmentDistance.hpp"
 #include <algorithm>
@@ -351,6 +352,51 @@ void nodeFrame(const Fabric& f, Index k, const Vec3& t, SectionRule rule, Vec3& 
   ax = semiAxes(f.secRadius[k], f.secFlat[k], rule);
 }
 
+// Cylinder form (the box form's separating plane, shape/Cylinder.hpp): g_k = min over the part of
+// y.n_k - (x_k.n_k + support_k(n_k)), n_k held in the part frame for the step. Each end section k
+// takes the candidate direction (cylinderDirections of either end node) that leaves it the most
+// room, its support capped by the measure memory as on a box face: for a circular section that is
+// its distance to the cylinder minus its radius, exactly (the round surface has no face to share).
+Real cylinderGapAt(const Fabric& f, Index cp, const RigidBody& body, int part, const Vec3& n, const Vec3& local,
+                   const BodyContact& h, int node) {
+  const Real partMin = body.partCentre(part).dot(n) + cylinderMinAlong(body.parts[part], local);
+  return partMin - (f.pos[f.elem0[cp] + node].dot(n) + h.support[node]);
+}
+
+template <class Listed>
+int cylinderGap(const Fabric& f, Index cp, const RigidBody& body, int part, SectionRule rule, BodyContact c,
+                BodyContact out[2], const Vec3Array* tangent, const BodyContact* held, const Listed& listed) {
+  const Index i = f.elem0[cp];
+  const Mat3 A = body.partAxes(part);
+  const Vec3 centre = body.partCentre(part);
+  Vec3 dirs[12];
+  int nd = 0;
+  for (int k = 0; k < 2; ++k) nd += cylinderDirections(body.parts[part], A.transpose() * (f.pos[i + k] - centre), dirs + nd);
+  int count = 0;
+  for (int k = 0; k < 2; ++k) {
+    Vec3 u, d;
+    SemiAxes ax;
+    nodeFrame(f, i + k, yarnTangent(f, cp, k, tangent), rule, u, d, ax);
+    const bool heldHere = held && held->s == k;
+    Real best = -INFINITY;
+    for (int j = 0; j < nd; ++j) {
+      const Vec3 local = dirs[j], n = A * local;
+      const bool sameFace = heldHere && held->localNormal.dot(local) > 0.999;
+      const Real partMin = centre.dot(n) + cylinderMinAlong(body.parts[part], local);
+      const Real room = partMin - f.pos[i + k].dot(n);
+      const Real support = std::min(ellipseSupport(u, d, ax.a, ax.b, n), std::max(sameFace ? held->support[k] : ax.b, room));
+      const Real g = room - support;
+      if (g > best) best = g, c.normal = n, c.localNormal = local, c.support[k] = support;
+    }
+    c.s = k;
+    c.support[1 - k] = 0;
+    c.gap = best;
+    c.point = f.pos[i + k] + c.support[k] * c.normal;
+    if (listed(c)) out[count++] = c;
+  }
+  return count;
+}
+
 }  // namespace
 
 int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
@@ -382,6 +428,8 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
     out[0] = c;
     return 1;
   }
+  if (body.parts[part].type == RigidPart::Type::Cylinder)
+    return cylinderGap(f, cp, body, part, rule, c, out, tangent, held, listed);
   // The face of the box that leaves the CP the most room (the separating-axis choice among the
   // box's faces), then one contact per end section: a level CP under a face is held at both ends.
   const OBB box = body.partBox(part);
@@ -424,6 +472,13 @@ void remeasureBody(const Fabric& f, const RigidBody& body, BodyContact& c) {
     Vec3 P;
     c.gap = sphereGapAt(f.pos[i], f.pos[i + 1], body.partCentre(c.part), body.parts[c.part].radius, c, c.s, c.normal, P);
     c.point = P;
+    return;
+  }
+  if (body.parts[c.part].type == RigidPart::Type::Cylinder) {
+    c.normal = body.partAxes(c.part) * c.localNormal;
+    const int node = c.s > 0.5 ? 1 : 0;
+    c.gap = cylinderGapAt(f, c.cp, body, c.part, c.normal, c.localNormal, c, node);
+    c.point = f.pos[i + node] + c.support[node] * c.normal;
     return;
   }
   const OBB box = body.partBox(c.part);

@@ -35,6 +35,12 @@
 //          (of 6) that leaves the CP the most room (the separating-axis choice among the box's
 //          faces; it turns with the box), the supports held. dg_k/dx_k = -n, dg_k/dbody = n at the
 //          arm x_k + support_k n - x_G (translation and rotation).
+//   Cylinder a CP and a cylinder part (the RCC; the FSP's chisel-nosed one: shape/Cylinder.hpp): the
+//          box's separating-plane form, one contact per end section k, each with its own n_k (held in
+//          the part frame): of the candidate directions (the faces' normals, the round surface's at
+//          the node, the direction to the round cylinder's closest point) the one that leaves the
+//          section the most room; g_k = min over the part of y.n_k (exact) - (x_k.n_k + support_k);
+//          the same rows as the box.
 // A pair of CPs is Cross or Side by the angle between the axes with hysteresis (enter Side below
 // kSideEnterDeg, leave above kSideLeaveDeg), never by the instantaneous normal. Orientation: a pair
 // remembers its normal, and where the axes have passed through each other (the vector between the
