@@ -125,6 +125,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   }
   rep.rows = static_cast<long>(rows_.size());
   if (rows_.empty()) return;
+  colourRows(f);
 
   // The nodes the rows touch, each once, in the order the rows first reach them (a mark per node:
   // linear, where sorting the list cost 3 % of a ballistic step).
@@ -138,9 +139,12 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   keepVelocities(f);
 
   rep.iterations = solve(f, p, p.friction > 0);
-  for (const Row& r : rows_) {
+  parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
+    const Row& r = rows_[k];
     const Real vn = rowVelocity(f, r).dot(r.n);
-    const Real miss = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
+    miss_[k] = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
+  });
+  for (Real miss : miss_) {
     rep.residual = std::max(rep.residual, miss);
     rep.unresolved += miss > p.tolerance;
   }
@@ -171,27 +175,60 @@ Real ImpulseLaw::energyChange(const Fabric& f) const {
   });
 }
 
+// The rows by colour (law/RowColouring: rows of one colour share no node), the body rows last: the
+// sweeps then solve each colour's rows at once on the threads, and the body rows one by one.
+void ImpulseLaw::colourRows(const Fabric& f) {
+  colouring_.build(static_cast<Index>(rows_.size()), f.nNodes(), [&](Index r, Index* node) {
+    const Row& q = rows_[r];
+    if (q.body >= 0) return -1;  // all of a body's rows share it
+    for (int k = 0; k < 4; ++k) node[k] = q.node[k];
+    return 4;
+  });
+  sorted_.resize(rows_.size());
+  for (std::size_t k = 0; k < rows_.size(); ++k) sorted_[k] = rows_[colouring_.order()[k]];
+  rows_.swap(sorted_);
+  for (int c = 0; c <= RowColouring::kColours + 1; ++c) start_[c] = colouring_.begin(c);
+}
+
+// One Gauss-Seidel update of row r (projected on J >= 0 and the friction cone); returns how far the
+// row missed its target before it (below it, or above it while still pushing: the accumulated
+// impulse can give back) [m/s].
+Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool friction) {
+  const Vec3 vr = rowVelocity(f, r);
+  const Real vn = vr.dot(r.n);
+  const Real miss = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
+  const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
+  Vec3 J = (lambda - r.lambda) * r.n;
+  r.lambda = lambda;
+  if (friction) {  // Coulomb: cancel the tangential slip, within the cone mu * lambda
+    const Vec3 vt = vr - vn * r.n;
+    Vec3 lt = r.lambdaT - vt * r.invK;
+    const Real lim = p.friction * r.lambda, len = lt.norm();
+    if (len > lim) lt *= lim / len;
+    J += lt - r.lambdaT;
+    r.lambdaT = lt;
+  }
+  applyRow(f, r, J);
+  return miss;
+}
+
+// Coloured sweeps: the colours in order, each colour's rows on the threads (they share no node:
+// each writes only its own nodes, so any split gives the same bits), then the serial tail (the
+// rows on a body) in order. A colour's misses are kept per row; their largest is order-free.
 int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
+  const int nThreads = threads();
+  miss_.resize(rows_.size());
+  const int colours = colouring_.colours();
   for (int it = 0; it < p.maxIterations; ++it) {
-    Real worst = 0;
-    for (Row& r : rows_) {
-      const Vec3 vr = rowVelocity(f, r);
-      const Real vn = vr.dot(r.n);
-      // Miss: below target, or above it while still pushing (the accumulated impulse can give back).
-      worst = std::max(worst, r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn);
-      const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
-      Vec3 J = (lambda - r.lambda) * r.n;
-      r.lambda = lambda;
-      if (friction) {  // Coulomb: cancel the tangential slip, within the cone mu * lambda
-        const Vec3 vt = vr - vn * r.n;
-        Vec3 lt = r.lambdaT - vt * r.invK;
-        const Real lim = p.friction * r.lambda, len = lt.norm();
-        if (len > lim) lt *= lim / len;
-        J += lt - r.lambdaT;
-        r.lambdaT = lt;
-      }
-      applyRow(f, r, J);
+    for (int c = 0; c < colours; ++c) {
+      const Index b = start_[c];
+      parallelFor(start_[c + 1] - b, kRowGrain, nThreads,
+                  [&](Index k) { miss_[b + k] = solveRow(f, rows_[b + k], p, friction); });
     }
+    for (Index k = start_[RowColouring::kColours], n = static_cast<Index>(rows_.size()); k < n; ++k)
+      miss_[k] = solveRow(f, rows_[k], p, friction);
+    Real worst = 0;
+    for (Real m : miss_) worst = std::max(worst, m);
     if (worst <= p.tolerance) return it + 1;
   }
   return p.maxIterations;
@@ -209,6 +246,7 @@ Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p, std::vector<RigidB
     rows_[kept++] = q;
   }
   rows_.resize(kept);
+  colourRows(f);
   keepVelocities(f);
   solve(f, p, false);
   const Real work = storeBodies(bodies);

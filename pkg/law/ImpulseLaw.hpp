@@ -20,12 +20,16 @@
 // momentum is exchanged exactly). Its room is the gap alone: a body does not flatten the sections.
 // Simultaneous rows are solved by projected Gauss-Seidel on accumulated impulses (J >= 0, and the
 // Coulomb friction impulse within mu J) until no row misses its target by more than the tolerance
-// or maxIterations is reached; the residual and unresolved rows are reported, never hidden.
+// or maxIterations is reached; the residual and unresolved rows are reported, never hidden. The
+// sweeps are coloured (law/RowColouring): rows that share no node are solved at once on the
+// threads, colour after colour, the rows on a rigid body last in row order; the colouring follows
+// the row list alone, so every thread count gives the same bits.
 #pragma once
 #include "fabric/Fabric.hpp"
 #include "geom/BodyContact.hpp"
 #include "geom/CPContact.hpp"
 #include "law/ContactParams.hpp"
+#include "law/RowColouring.hpp"
 #include <functional>
 #include <vector>
 
@@ -88,10 +92,17 @@ class ImpulseLaw {
   void applyRow(Fabric& f, const Row& r, const Vec3& J);      // J on B, -J on A
   void loadBodies(const std::vector<RigidBody>* bodies);
   Real storeBodies(std::vector<RigidBody>* bodies);           // writes back, returns the bodies' work
-  int solve(Fabric& f, const ContactParams& p, bool friction);  // Gauss-Seidel sweeps, returns the count
+  void colourRows(const Fabric& f);                            // rows_ by colour, start_ set
+  Real solveRow(Fabric& f, Row& r, const ContactParams& p, bool friction);  // returns the row's miss
+  int solve(Fabric& f, const ContactParams& p, bool friction);  // coloured Gauss-Seidel sweeps, returns the count
   void keepVelocities(const Fabric& f);      // of the touched nodes, before the impulses
   Real energyChange(const Fabric& f) const;  // kinetic energy of the integer step the impulses add [J]
-  std::vector<Row> rows_;
+  /// Rows of a colour below which it is solved on one thread (a parallel region costs a few us).
+  static constexpr Index kRowGrain = 512;
+  std::vector<Row> rows_, sorted_;
+  RowColouring colouring_;
+  Index start_[RowColouring::kColours + 2] = {};  // rows_[start_[c], start_[c + 1]): colour c, the tail last
+  std::vector<Real> miss_;                        // per row: its miss in the last sweep [m/s]
   std::vector<Real> allowed_;  // resolve: per contact the approach speed its room allows [m/s], NaN: no row
   std::vector<BodyVelocity> bodyVel_;
   Vec3Array vBefore_;
