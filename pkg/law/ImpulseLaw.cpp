@@ -68,42 +68,41 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   rep = ImpulseReport{};
   rows_.clear();
   loadBodies(bodies);
-  // Which contacts need a row, each on its own (threads; the capacity is the costly part and reads
-  // nothing the rows change); then the rows in contact order.
+  // Which contacts need a row and their rows, each contact on its own (threads; the capacity is the
+  // costly part and reads nothing the rows change); then the body rows, one by one.
   const Index nc = static_cast<Index>(contacts.size());
-  allowed_.resize(contacts.size());
+  slots_.resize(contacts.size());
   // Model Gap: a row for every listed contact (the multiplier's sign decides); one that does not
   // approach beyond its gap at the start gets the gap as its room (its flattening capacity is not
   // measured: the row then stops it at the gap if other rows push it on).
   const bool everyContact = p.model == ContactModel::Gap;
   parallelFor(nc, 256, threads(), [&](Index c) {
-    Index node[4];
-    Real w[4];
-    nodesAndWeights(f, contacts[c], node, w);
-    const Real vn0 = relativeVelocity(f, node, w).dot(contacts[c].normal);
-    // Approach the room absorbs: the gap, and what flattening can still take, unless the contact is
-    // still overlapping after the flattening passes (flattening has stopped working for it).
-    const Real gap = contacts[c].gap;
-    allowed_[c] = everyContact ? std::max(gap, Real(0)) / dt : NAN;
-    if (!(vn0 < -std::max(gap, Real(0)) / dt - p.tolerance)) return;  // separating, resting (Eq. 4), or within the gap
-    const Real allowed = (gap < 0 ? 0.0 : gap + capacity(contacts[c])) / dt;
-    if (!everyContact && !(vn0 < -allowed - p.tolerance)) return;  // taken up by flattening
-    allowed_[c] = allowed;
-  });
-  for (Index c = 0; c < nc; ++c) {
-    const Real allowed = allowed_[c];
-    if (std::isnan(allowed)) continue;
-    Row r;
+    Row& r = slots_[c];
+    r.invK = 0;  // no row
     nodesAndWeights(f, contacts[c], r.node, r.w);
     r.n = contacts[c].normal;
     r.vn0 = relativeVelocity(f, r.node, r.w).dot(r.n);
+    // Approach the room absorbs: the gap, and what flattening can still take, unless the contact is
+    // still overlapping after the flattening passes (flattening has stopped working for it).
+    const Real gap = contacts[c].gap;
+    Real allowed = std::max(gap, Real(0)) / dt;
+    if (r.vn0 < -allowed - p.tolerance) {  // neither separating, resting (Eq. 4), nor within the gap
+      allowed = (gap < 0 ? 0.0 : gap + capacity(contacts[c])) / dt;
+      if (!everyContact && !(r.vn0 < -allowed - p.tolerance)) return;  // taken up by flattening
+    } else if (!everyContact) {
+      return;
+    }
     Real K = 0;
     for (int k = 0; k < 4; ++k) K += r.w[k] * r.w[k] * f.invMass[r.node[k]];
-    if (!(K > 0)) continue;  // both CPs kinematic
+    if (!(K > 0)) return;  // both CPs kinematic
     r.invK = 1 / K;
     r.target = -allowed;
-    rows_.push_back(r);
-  }
+    r.lambda = 0, r.lambdaT.setZero(), r.body = -1, r.arm.setZero();
+  });
+  yarnRows_.clear();
+  for (Index c = 0; c < nc; ++c)
+    if (slots_[c].invK > 0) yarnRows_.push_back(c);
+  bodyRows_.clear();
   for (const BodyContact& c : bodyContacts) {
     Row r;
     r.node[0] = f.elem0[c.cp], r.node[1] = r.node[0] + 1, r.node[2] = r.node[3] = r.node[0];
@@ -121,11 +120,14 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     if (!(K > 0)) continue;  // kinematic CP and body
     r.invK = 1 / K;
     r.target = -allowed;
-    rows_.push_back(r);
+    bodyRows_.push_back(r);
   }
-  rep.rows = static_cast<long>(rows_.size());
-  if (rows_.empty()) return;
-  colourRows(f);
+  const Index nYarn = static_cast<Index>(yarnRows_.size());
+  rep.rows = static_cast<long>(nYarn + bodyRows_.size());
+  if (rep.rows == 0) return;
+  // The rows in contact order, then the body rows: coloured, and laid out by colour in rows_.
+  colourRows(f, static_cast<Index>(rep.rows),
+             [&](Index r) -> const Row& { return r < nYarn ? slots_[yarnRows_[r]] : bodyRows_[r - nYarn]; });
 
   // The nodes the rows touch, each once, in the order the rows first reach them (a mark per node:
   // linear, where sorting the list cost 3 % of a ballistic step).
@@ -154,7 +156,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
 
 void ImpulseLaw::keepVelocities(const Fabric& f) {
   vBefore_.resize(touched_.size());
-  for (std::size_t k = 0; k < touched_.size(); ++k) vBefore_[k] = f.vel[touched_[k]];
+  parallelFor(static_cast<Index>(touched_.size()), kParallelGrain, threads(), [&](Index k) { vBefore_[k] = f.vel[touched_[k]]; });
 }
 
 // The impulses change v_{n+1/2} by dv, which is v_n + (dt/2) a_n: the kinetic energy of step n
@@ -175,18 +177,19 @@ Real ImpulseLaw::energyChange(const Fabric& f) const {
   });
 }
 
-// The rows by colour (law/RowColouring: rows of one colour share no node), the body rows last: the
-// sweeps then solve each colour's rows at once on the threads, and the body rows one by one.
-void ImpulseLaw::colourRows(const Fabric& f) {
-  colouring_.build(static_cast<Index>(rows_.size()), f.nNodes(), [&](Index r, Index* node) {
-    const Row& q = rows_[r];
+// The rows by colour (law/RowColouring: rows of one colour share no node), the body rows last, laid
+// out in that order in rows_ (rowAt(r): row r of the list, which rows_ must not hold): the sweeps
+// then solve each colour's rows at once on the threads, and the body rows one by one.
+template <class RowAt>
+void ImpulseLaw::colourRows(const Fabric& f, Index n, RowAt&& rowAt) {
+  colouring_.build(n, f.nNodes(), [&](Index r, Index* node) {
+    const Row& q = rowAt(r);
     if (q.body >= 0) return -1;  // all of a body's rows share it
     for (int k = 0; k < 4; ++k) node[k] = q.node[k];
     return 4;
   });
-  sorted_.resize(rows_.size());
-  for (std::size_t k = 0; k < rows_.size(); ++k) sorted_[k] = rows_[colouring_.order()[k]];
-  rows_.swap(sorted_);
+  rows_.resize(static_cast<std::size_t>(n));
+  parallelFor(n, kParallelGrain, threads(), [&](Index k) { rows_[k] = rowAt(colouring_.order()[k]); });
   for (int c = 0; c <= RowColouring::kColours + 1; ++c) start_[c] = colouring_.begin(c);
 }
 
@@ -246,7 +249,8 @@ Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p, std::vector<RigidB
     rows_[kept++] = q;
   }
   rows_.resize(kept);
-  colourRows(f);
+  sorted_.swap(rows_);
+  colourRows(f, static_cast<Index>(kept), [&](Index r) -> const Row& { return sorted_[r]; });
   keepVelocities(f);
   solve(f, p, false);
   const Real work = storeBodies(bodies);

@@ -48,6 +48,9 @@ struct ImpulseReport {
 
 class ImpulseLaw {
  public:
+  /// Rows of a colour below which it is solved on one thread (a parallel region costs a few us).
+  static constexpr Index kRowGrain = 256;
+
   /// What flattening can still take along a contact's normal (both CPs) [m]; asked only for contacts
   /// that approach faster than their gap alone allows.
   using Capacity = std::function<Real(const CPContact&)>;
@@ -92,18 +95,19 @@ class ImpulseLaw {
   void applyRow(Fabric& f, const Row& r, const Vec3& J);      // J on B, -J on A
   void loadBodies(const std::vector<RigidBody>* bodies);
   Real storeBodies(std::vector<RigidBody>* bodies);           // writes back, returns the bodies' work
-  void colourRows(const Fabric& f);                            // rows_ by colour, start_ set
+  template <class RowAt>
+  void colourRows(const Fabric& f, Index n, RowAt&& rowAt);    // rows_ by colour, start_ set
   Real solveRow(Fabric& f, Row& r, const ContactParams& p, bool friction);  // returns the row's miss
   int solve(Fabric& f, const ContactParams& p, bool friction);  // coloured Gauss-Seidel sweeps, returns the count
   void keepVelocities(const Fabric& f);      // of the touched nodes, before the impulses
   Real energyChange(const Fabric& f) const;  // kinetic energy of the integer step the impulses add [J]
-  /// Rows of a colour below which it is solved on one thread (a parallel region costs a few us).
-  static constexpr Index kRowGrain = 512;
   std::vector<Row> rows_, sorted_;
+  std::vector<Row> slots_;      // resolve: per contact its row (invK 0: none)
+  std::vector<Index> yarnRows_;  // the contacts with a row, in order
+  std::vector<Row> bodyRows_;
   RowColouring colouring_;
   Index start_[RowColouring::kColours + 2] = {};  // rows_[start_[c], start_[c + 1]): colour c, the tail last
   std::vector<Real> miss_;                        // per row: its miss in the last sweep [m/s]
-  std::vector<Real> allowed_;  // resolve: per contact the approach speed its room allows [m/s], NaN: no row
   std::vector<BodyVelocity> bodyVel_;
   Vec3Array vBefore_;
   Real dt_ = 0;

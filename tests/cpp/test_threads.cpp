@@ -195,7 +195,7 @@ TEST(Threads, RowsOfAColourShareNoNodeOnAStruckPly) {
     }
   }
   EXPECT_EQ(tail, 0) << "every yarn row found a colour";
-  EXPECT_GE(largest, 512) << "a colour large enough to be split over the threads (ImpulseLaw::kRowGrain)";
+  EXPECT_GE(largest, 2 * ImpulseLaw::kRowGrain) << "a colour large enough to be split over the threads";
   EXPECT_GE(col.colours(), 2);
   EXPECT_GT(o.impulseRows, 0);
 }
