@@ -66,7 +66,6 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
                          const ContactParams& p, ImpulseReport& rep, const std::vector<BodyContact>& bodyContacts,
                          std::vector<RigidBody>* bodies) {
   rep = ImpulseReport{};
-  rows_.clear();
   loadBodies(bodies);
   // Which contacts need a row and their rows, each contact on its own (threads; the capacity is the
   // costly part and reads nothing the rows change); then the body rows, one by one.
@@ -124,9 +123,12 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   }
   const Index nYarn = static_cast<Index>(yarnRows_.size());
   rep.rows = static_cast<long>(nYarn + bodyRows_.size());
-  if (rep.rows == 0) return;
+  if (rep.rows == 0) {
+    rows_.clear();
+    return;
+  }
   // The rows in contact order, then the body rows: coloured, and laid out by colour in rows_.
-  colourRows(f, static_cast<Index>(rep.rows),
+  colourRows(f, static_cast<Index>(rep.rows), p.sweepOrder == SweepOrder::Coloured,
              [&](Index r) -> const Row& { return r < nYarn ? slots_[yarnRows_[r]] : bodyRows_[r - nYarn]; });
 
   // The nodes the rows touch, each once, in the order the rows first reach them (a mark per node:
@@ -179,12 +181,13 @@ Real ImpulseLaw::energyChange(const Fabric& f) const {
 
 // The rows by colour (law/RowColouring: rows of one colour share no node), the body rows last, laid
 // out in that order in rows_ (rowAt(r): row r of the list, which rows_ must not hold): the sweeps
-// then solve each colour's rows at once on the threads, and the body rows one by one.
+// then solve each colour's rows at once on the threads, and the body rows one by one. Not
+// coloured (SweepOrder::Sequential): every row in the serial tail, in list order.
 template <class RowAt>
-void ImpulseLaw::colourRows(const Fabric& f, Index n, RowAt&& rowAt) {
+void ImpulseLaw::colourRows(const Fabric& f, Index n, bool coloured, RowAt&& rowAt) {
   colouring_.build(n, f.nNodes(), [&](Index r, Index* node) {
     const Row& q = rowAt(r);
-    if (q.body >= 0) return -1;  // all of a body's rows share it
+    if (q.body >= 0 || !coloured) return -1;  // all of a body's rows share it
     for (int k = 0; k < 4; ++k) node[k] = q.node[k];
     return 4;
   });
@@ -250,7 +253,7 @@ Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p, std::vector<RigidB
   }
   rows_.resize(kept);
   sorted_.swap(rows_);
-  colourRows(f, static_cast<Index>(kept), [&](Index r) -> const Row& { return sorted_[r]; });
+  colourRows(f, static_cast<Index>(kept), p.sweepOrder == SweepOrder::Coloured, [&](Index r) -> const Row& { return sorted_[r]; });
   keepVelocities(f);
   solve(f, p, false);
   const Real work = storeBodies(bodies);

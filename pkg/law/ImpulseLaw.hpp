@@ -96,7 +96,7 @@ class ImpulseLaw {
   void loadBodies(const std::vector<RigidBody>* bodies);
   Real storeBodies(std::vector<RigidBody>* bodies);           // writes back, returns the bodies' work
   template <class RowAt>
-  void colourRows(const Fabric& f, Index n, RowAt&& rowAt);    // rows_ by colour, start_ set
+  void colourRows(const Fabric& f, Index n, bool coloured, RowAt&& rowAt);  // rows_ by colour, start_ set
   Real solveRow(Fabric& f, Row& r, const ContactParams& p, bool friction);  // returns the row's miss
   int solve(Fabric& f, const ContactParams& p, bool friction);  // coloured Gauss-Seidel sweeps, returns the count
   void keepVelocities(const Fabric& f);      // of the touched nodes, before the impulses

@@ -9,7 +9,7 @@ namespace woven {
 
 void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
                                  std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop,
-                                 Real maxMove, SectionRule rule, Real dt, ProjectionReport& rep) {
+                                 Real maxMove, SectionRule rule, Real dt, ProjectionReport& rep, SweepOrder order) {
   rep = ProjectionReport{};
   if (sweeps <= 0 || (contacts.empty() && bodyContacts.empty())) return;
   const Index nc = static_cast<Index>(contacts.size());
@@ -23,9 +23,19 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
   // The contacts by colour: those of a colour share no node (law/RowColouring), and a contact reads
   // and moves only its own four nodes, so a colour's contacts are projected at once on the threads
   // with the same bits as one after another. The body contacts (all share the body) follow, in order.
+  // SweepOrder::Sequential: every contact in the serial tail, in order.
   colouring_.build(nc, f.nNodes(), [&](Index q, Index* node) {
+    if (order == SweepOrder::Sequential) return -1;
     node[0] = f.elem0[contacts[q].cpA], node[1] = node[0] + 1, node[2] = f.elem0[contacts[q].cpB], node[3] = node[2] + 1;
     return 4;
+  });
+  // What a sweep reads first, in colour order: most contacts are skipped on it alone, without
+  // reading the contact (in colour order the contacts are scattered in memory).
+  slots_.resize(contacts.size());
+  parallelFor(nc, kParallelGrain, threads(), [&](Index k) {
+    const Index q = colouring_.order()[k];
+    const CPContact& c = contacts[q];
+    slots_[k] = {q, c.cpA, c.cpB, f.elem0[c.cpA], f.elem0[c.cpB]};
   });
   bool bodyMoved = true;
   // The share of a move that moves no node more than maxMove, nor any node more than
@@ -54,11 +64,11 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
   };
   movedAny_.assign(f.nNodes(), 0);
   // One contact's move; returns the overlap beyond allowance + slop it took out (0: no move) [m].
-  const auto projectOne = [&](Index q, bool all) -> Real {
-    CPContact& c = contacts[q];
-    if (!f.alive[c.cpA] || !f.alive[c.cpB]) return 0;  // broken in this step
-    const Index i = f.elem0[c.cpA], j = f.elem0[c.cpB];
+  const auto projectOne = [&](const Slot& slot, bool all) -> Real {
+    const Index i = slot.i, j = slot.j, q = slot.q;
     if (!all && !(movedBefore(i) || movedBefore(i + 1) || movedBefore(j) || movedBefore(j + 1))) return 0;
+    if (!f.alive[slot.cpA] || !f.alive[slot.cpB]) return 0;  // broken in this step
+    CPContact& c = contacts[q];
     remeasure(f, c, rule, false);
     if (!(c.gap < -slop)) return 0;
     if (std::isnan(allowance_[q])) allowance_[q] = allowance(c);
@@ -84,16 +94,11 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     rep.overlapLeft = 0;
     for (int col = 0; col < colouring_.colours(); ++col) {
       const Index b = colouring_.begin(col);
-      parallelFor(colouring_.begin(col + 1) - b, kContactGrain, nThreads, [&](Index k) {
-        const Index q = colouring_.order()[b + k];
-        outcome_[q] = projectOne(q, all);
-      });
+      parallelFor(colouring_.begin(col + 1) - b, kContactGrain, nThreads,
+                  [&](Index k) { outcome_[b + k] = projectOne(slots_[b + k], all); });
     }
     // The colouring's tail (a contact that found no colour free) in order.
-    for (Index k = colouring_.begin(RowColouring::kColours); k < nc; ++k) {
-      const Index q = colouring_.order()[k];
-      outcome_[q] = projectOne(q, all);
-    }
+    for (Index k = colouring_.begin(RowColouring::kColours); k < nc; ++k) outcome_[k] = projectOne(slots_[k], all);
     for (Real left : outcome_)
       if (left > 0) ++rep.pushed, moved = true, rep.overlapLeft = std::max(rep.overlapLeft, left);
     for (BodyContact& c : bodyContacts) {

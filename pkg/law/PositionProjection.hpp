@@ -47,14 +47,18 @@ class PositionProjection {
   /// the mean overlap of 1 x, 10 x injected 5 times the energy).
   void project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
                std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop, Real maxMove,
-               SectionRule rule, Real dt, ProjectionReport& report);
+               SectionRule rule, Real dt, ProjectionReport& report, SweepOrder order = SweepOrder::Coloured);
 
  private:
   /// Contacts of a colour below which it is projected on one thread.
   static constexpr Index kContactGrain = 256;
   Real bookedEnergy(Fabric& f, Real dt);  // the energy the moves put in [J] (see project)
   std::vector<Real> allowance_;       // per contact, measured once per call (NaN: not yet)
-  std::vector<Real> outcome_;         // per contact: the overlap its move in this sweep took out [m] (0: none)
+  struct Slot {
+    Index q, cpA, cpB, i, j;  // the contact, its CPs and their first nodes
+  };
+  std::vector<Slot> slots_;           // the contacts in colour order
+  std::vector<Real> outcome_;         // per slot: the overlap its contact's move in this sweep took out [m] (0: none)
   RowColouring colouring_;            // of the contacts, by their four nodes
   std::vector<Index> elems_;          // the CPs with a moved node, in order
   std::vector<std::uint8_t> movedBefore_, movedNow_, movedAny_;  // per node: moved in the sweep before / in this one / at all
