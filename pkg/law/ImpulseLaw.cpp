@@ -2,6 +2,7 @@
 #include "core/Parallel.hpp"
 #include "fabric/SpringEnergy.hpp"
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 namespace woven {
@@ -221,16 +222,26 @@ Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool fricti
 // Coloured sweeps: the colours in order, each colour's rows on the threads (they share no node:
 // each writes only its own nodes, so any split gives the same bits), then the serial tail (the
 // rows on a body) in order. A colour's misses are kept per row; their largest is order-free.
+// Whether the colours are split over the threads changes no result, only the time: a sweep costs
+// a barrier per colour, and on cores busy with other processes each barrier waits for a thread
+// that is not running (measured, bench_threads at a load of 3-13 on 2 cores: the response phase
+// 8-13x slower on 2 threads than on 1 with every sweep split). So the first sweep of a step runs
+// split and the second on one thread, both timed, and the rest of the step's sweeps as the faster.
 int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
+  using Clock = std::chrono::steady_clock;
   const int nThreads = threads();
   miss_.resize(rows_.size());
   const int colours = colouring_.colours();
+  double seconds[2] = {0, 0};  // of the split sweep and of the one-thread sweep
   for (int it = 0; it < p.maxIterations; ++it) {
+    const bool split = nThreads > 1 && (it == 0 || (it > 1 && seconds[0] <= seconds[1]));
+    const auto t0 = Clock::now();
     for (int c = 0; c < colours; ++c) {
       const Index b = start_[c];
-      parallelFor(start_[c + 1] - b, kRowGrain, nThreads,
+      parallelFor(start_[c + 1] - b, kRowGrain, split ? nThreads : 1,
                   [&](Index k) { miss_[b + k] = solveRow(f, rows_[b + k], p, friction); });
     }
+    if (it < 2) seconds[it] = std::chrono::duration<double>(Clock::now() - t0).count();
     for (Index k = start_[RowColouring::kColours], n = static_cast<Index>(rows_.size()); k < n; ++k)
       miss_[k] = solveRow(f, rows_[k], p, friction);
     Real worst = 0;
