@@ -8,6 +8,7 @@
 #include "engine/FabricEngine.hpp"
 #include "engine/Snapshot.hpp"
 #include "geom/SeparatingAxis.hpp"
+#include "shape/Cylinder.hpp"
 #include "weave/WeaveBuilder.hpp"
 #include <memory>
 
@@ -124,7 +125,7 @@ bp::dict energyDict(FabricEngine& e) {
   const EnergyBooks b = e.dynamics().energy();
   bp::dict d;
   d["kinetic"] = b.kinetic, d["elastic"] = b.elastic, d["damped"] = b.damped, d["work"] = b.work;
-  d["initial"] = b.initial, d["contact"] = b.contact, d["contact_input"] = b.contactInput;
+  d["initial"] = b.initial, d["contact"] = b.contact, d["friction"] = b.friction, d["contact_input"] = b.contactInput;
   d["released"] = b.released, d["body_work"] = b.bodyWork, d["spring"] = b.spring, d["projection"] = b.projection;
   d["balance_error"] = b.balanceError();
   return d;
@@ -170,7 +171,7 @@ void setCheckpointInterval(FabricEngine& e, long k) {
 bool isKinematic(FabricEngine& e, Index i) { e.fabric().checkNode(i); return e.dynamics().isKinematic(i); }
 
 // --- collisions ---
-void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real mcd, const std::string& rule, Real margin,
+void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real bodyFriction, Real mcd, const std::string& rule, Real margin,
                         Real tolerance, int maxIterations, int flattenPasses, Real positionCorrection,
                         Real correctionSlop, Index selfExclude, const std::string& broad, Real skin, int threads,
                         bool yarnContacts, Real cacheDistance, const std::string& response, Real penaltyStiffness,
@@ -181,7 +182,7 @@ void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real m
   p.sweepOrder = sweepOrderByName(sweepOrder);
   p.model = contactModelByName(model), p.projectionSweeps = projectionSweeps, p.projectionSlop = projectionSlop;
   p.projectionMaxMove = projectionMaxMove;
-  p.restitution = restitution, p.friction = friction, p.mcd = mcd, p.rule = sectionRuleByName(rule);
+  p.restitution = restitution, p.friction = friction, p.bodyFriction = bodyFriction, p.mcd = mcd, p.rule = sectionRuleByName(rule);
   p.margin = margin, p.tolerance = tolerance, p.maxIterations = maxIterations, p.flattenPasses = flattenPasses;
   p.positionCorrection = positionCorrection, p.correctionSlop = correctionSlop, p.selfExclude = selfExclude;
   p.skin = skin, p.threads = threads, p.yarnContacts = yarnContacts, p.cacheDistance = cacheDistance;
@@ -249,7 +250,16 @@ RigidBody& bodyAt(FabricEngine& e, int k) {
   require(k >= 0 && k < static_cast<int>(b.size()), "index", k, "[0, " + fmt(static_cast<long>(b.size()) - 1) + "]");
   return b[k];
 }
-// parts: list of ('box', half_extents Vector3, offset Vector3, Quaternion) or ('sphere', radius, offset, Quaternion)
+// A cylinder's (radius, half_length, chisel_angle, land_half_width) from a Python sequence.
+Eigen::Matrix<Real, 4, 1> cylinderDims(bp::object d) {
+  require(bp::len(d) == 4, "parts", static_cast<Real>(bp::len(d)),
+          "a cylinder's (radius [m], half_length [m], chisel_angle [rad], land_half_width [m])");
+  Eigen::Matrix<Real, 4, 1> v;
+  for (int k = 0; k < 4; ++k) v[k] = bp::extract<Real>(d[k]);
+  return v;
+}
+// parts: list of ('box', half_extents Vector3, offset Vector3, Quaternion), ('sphere', radius, offset, Quaternion)
+// or ('cylinder', (radius, half_length, chisel_angle, land_half_width), offset, Quaternion)
 int addBody(FabricEngine& e, long id, bp::object parts, Real mass, const Vec3& inertia, const Vec3& pos, const Quat& ori,
             const Vec3& vel, const Vec3& angVel) {
   RigidBody b;
@@ -260,7 +270,14 @@ int addBody(FabricEngine& e, long id, bp::object parts, Real mass, const Vec3& i
     const std::string kind = bp::extract<std::string>(t[0]);
     if (kind == "box") p.type = RigidPart::Type::Box, p.halfSize = bp::extract<Vec3>(t[1]);
     else if (kind == "sphere") p.type = RigidPart::Type::Sphere, p.radius = bp::extract<Real>(t[1]);
-    else throw ParameterError("parts", "'" + kind + "'", "'box' or 'sphere' parts");
+    else if (kind == "cylinder") {
+      // ('cylinder', (radius, half_length, chisel_angle, land_half_width), offset, ori): axis z, nose +z.
+      p.type = RigidPart::Type::Cylinder;
+      const Eigen::Matrix<Real, 4, 1> dims = cylinderDims(t[1]);
+      p.radius = dims[0], p.halfLength = dims[1], p.chiselAngle = dims[2], p.landHalfWidth = dims[3];
+      require(bodyStage(e).params().model == ContactModel::Gap, "parts", 0,
+              "box or sphere parts with contact_model 'paper' (a cylinder has the gap model's form only)");
+    } else throw ParameterError("parts", "'" + kind + "'", "'box', 'sphere' or 'cylinder' parts");
     p.offset = bp::extract<Vec3>(t[2]);
     p.ori = bp::extract<Quat>(t[3]);
     b.parts.push_back(p);
@@ -445,6 +462,18 @@ BOOST_PYTHON_MODULE(_woven) {
           "Largest stable time step [s] of a penalty contact of effective mass m [kg] > 0 and stiffness k [N/m] > 0: "
           "2 sqrt(m / k).");
   bp::def("km2_706", &km2_706, "KM2 style 706 preset parameters.");
+  bp::def("cylinder_min_along", +[](Real radius, Real halfLength, Real chiselAngle, Real landHalfWidth, const Vec3& n) {
+            RigidPart p;
+            p.type = RigidPart::Type::Cylinder, p.radius = radius, p.halfLength = halfLength;
+            p.chiselAngle = chiselAngle, p.landHalfWidth = landHalfWidth;
+            require(std::isfinite(radius) && radius >= 1e-9 && radius <= 10, "radius", radius, "[1e-9, 10] m");
+            validateCylinder(p);
+            require(n.allFinite() && std::abs(n.norm() - 1) < 1e-9, "n", n.norm(), "a unit vector");
+            return cylinderMinAlong(p, n);
+          },
+          (bp::arg("radius"), bp::arg("half_length"), bp::arg("chisel_angle"), bp::arg("land_half_width"), bp::arg("n")),
+          "min over a cylinder part (axis z, centre at the origin; chisel nose at +z: shape/Cylinder.hpp) of y.n [m], "
+          "n a unit vector in its frame: exact.");
   bp::def("set_threads", +[](int n) {
             require(n >= 0 && n <= 1024, "threads", n, "[0, 1024] (0: follow OpenMP: OMP_NUM_THREADS, yade -j N)");
             setThreads(n);
@@ -525,7 +554,7 @@ BOOST_PYTHON_MODULE(_woven) {
                     +[](FabricEngine& e, Real t) { e.dynamics().setVelocityRamp(t); },
                     "prescribed velocities grow linearly over this time from t = 0 [s] (0: at once)")
       .def("enable_collisions", &enableCollisionsPy,
-           (bp::arg("restitution") = 0.0, bp::arg("friction") = 0.0, bp::arg("mcd") = 0.6,
+           (bp::arg("restitution") = 0.0, bp::arg("friction") = 0.0, bp::arg("body_friction") = 0.0, bp::arg("mcd") = 0.6,
             bp::arg("section_rule") = "constant_area", bp::arg("margin") = 1e-6, bp::arg("tolerance") = 1e-6,
             bp::arg("max_iterations") = 50, bp::arg("flatten_passes") = 4, bp::arg("position_correction") = 0.2,
             bp::arg("correction_slop") = 0.5e-6, bp::arg("self_exclude") = 1, bp::arg("broad_phase") = "tree",
@@ -534,7 +563,8 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("flattening") = "geometric", bp::arg("section_stiffness") = 1e4, bp::arg("contact_model") = "gap",
             bp::arg("projection_sweeps") = -1, bp::arg("projection_slop") = 0.5e-6, bp::arg("projection_max_move") = 10e-6,
             bp::arg("sweep_order") = "coloured"),
-           "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction >= 0, mcd in (0, 1), "
+           "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction (yarn-yarn) and body_friction "
+           "(rigid body-yarn) in [0, 2], 0 with response 'penalty', mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
            "in [0, 1] per step, correction_slop [m], broad_phase 'tree', 'grid' or 'sap', skin [m] >= 0 (Verlet skin of "
            "the broad phase), threads in [0, 64] (collision stage; 0: woven.threads(); same results for any count), yarn_contacts (False: only "
@@ -592,7 +622,11 @@ BOOST_PYTHON_MODULE(_woven) {
           const Mat3 A = b.partAxes(i);
           bp::list rows;
           for (int r = 0; r < 3; ++r) rows.append(bp::make_tuple(A(r, 0), A(r, 1), A(r, 2)));
-          if (b.parts[i].type == RigidPart::Type::Box) out.append(bp::make_tuple("box", b.parts[i].halfSize, b.partCentre(i), rows));
+          const RigidPart& q = b.parts[i];
+          if (q.type == RigidPart::Type::Cylinder)
+            out.append(bp::make_tuple("cylinder", bp::make_tuple(q.radius, q.halfLength, q.chiselAngle, q.landHalfWidth),
+                                      b.partCentre(i), rows));
+          else if (q.type == RigidPart::Type::Box) out.append(bp::make_tuple("box", b.parts[i].halfSize, b.partCentre(i), rows));
           else out.append(bp::make_tuple("sphere", b.parts[i].radius, b.partCentre(i), rows));
         }
         return out;

@@ -1,6 +1,8 @@
-# Ballistic impact of a rigid projectile on a single ply (paper Sec. 6.2), run inside YADE's loop.
-#   yade -n -x scripts/ballistic.py [V=200] [shape=box|sphere] [mass=1.1e-3] [size=5.59e-3] [side=0.0508]
-#                                   [clamp=4] [t_end=1e-4] [state=FILE] [vtk_every=N] [out=DIR] ...
+# Ballistic impact of a rigid projectile on a single ply (paper Sec. 6.2) or a pack, run inside YADE's loop.
+#   yade -n -x scripts/ballistic.py [V=200] [shape=box|sphere|rcc|fsp] [mass=1.1e-3] [size=5.59e-3] [side=0.0508]
+#                                   [clamp=4] [plies=1] [ply_gap=-1] [ply_angles=0,45] [yaw=0] [obliquity=0]
+#                                   [t_end=1e-4] [state=FILE] [vtk_every=N] [out=DIR] ...
+# Packs and the standard projectiles (RCC, FSP as exact cylinder parts): docs/ballistic.md.
 # The fabric (default KM2 style 706, a 50.8 x 50.8 mm single ply, clamped on its 4 edges) is built,
 # its sections settled; the projectile is an ordinary YADE body (a cube of edge `size` face on, or a
 # sphere of diameter `size`) coupled to the fabric (woven.coupling), `standoff` above its top surface,
@@ -13,6 +15,7 @@
 # vtk/frames.pvd with yarn tubes and the projectile every vtk_every steps, summary.json.
 import math
 import os
+import subprocess
 import sys
 import time
 
@@ -20,11 +23,17 @@ import numpy as np
 import woven
 from woven.output import savetxt, atomic_open, atomic_path, savefig
 from woven.params import read_params
+from woven.energy_guard import EnergyGuard
 from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS
 from woven.contact import CONTACT_KEYS
 from yade import plot, utils
 import woven.ballistic
+import woven.contact
+import woven.backface
+import woven.render
+import woven.pack
+import woven.projectiles
 from woven.overlap import OverlapMeter
 import woven.overlap
 import woven.yade_grid
@@ -51,17 +60,27 @@ defaults.update({
     # Measured on the default scene over 20 us (docs/ballistic.md): absorbed energy within 0.2 % of
     # the tension scene's contact settings (4 passes, 50 sweeps, 5 um skin), at 0.6x the wall time.
     'flatten_passes': (1, '', CONTACT_KEYS['flatten_passes'][2]),
-    'max_iterations': (10, '', CONTACT_KEYS['max_iterations'][2]),
+    'max_iterations': (10, '', CONTACT_KEYS['max_iterations'][2] + '; a pack takes this many per ply unless given'),
     'skin': (1e-5, 'm', CONTACT_KEYS['skin'][2]),
     # Same pairs as the tree; 100 us of the default scene in 69 s against 84 s (bench_ballistic.py).
     'broad_phase': ('grid', '', CONTACT_KEYS['broad_phase'][2]),
     'side': (0.0508, 'm', 'side of the square ply (yarns = side / spacing, rounded to whole pattern repeats)'),
-    'clamp': (4, '', 'edges held: 4 (every yarn end), 2 (warp ends only), 0 (free)'),
+    'clamp': (4, '', 'edges held: 4 (every yarn end), 2 (warp ends only), 0 (free); every ply alike'),
+    'plies': (1, '', 'plies in the pack, [1, 40] (woven.pack: copies of the ply stacked below the first)'),
+    'ply_gap': (-1.0, 'm', 'clear gap between neighbouring plies, [0, 0.01] m; -1: one yarn thickness'),
+    'ply_angles': ('0', 'deg', "in-plane angle of each ply about the ply's centre, comma-separated (one for all), "
+                   'finite, [-360, 360]'),
     'state': ('', '', 'initial state file of the same weave (e.g. pretensioned.state of tension.py); empty: at rest'),
     'V': (200.0, 'm/s', 'impact speed, normal to the ply'),
-    'shape': ('box', '', "'box' (a cube, face on, as the paper's OBB-bounded projectile) or 'sphere'"),
-    'mass': (1.1e-3, 'kg', 'projectile mass (default: a 0.22-calibre, 17-grain fragment simulator)'),
-    'size': (5.59e-3, 'm', 'cube edge or sphere diameter (default: 0.22 calibre)'),
+    'shape': ('box', '', "'box' (a cube, face on, as the paper's OBB-bounded projectile), 'sphere', 'rcc' (0.22-calibre "
+              "right circular cylinder) or 'fsp' (17-grain 0.22-calibre fragment simulator, chisel nose): woven.projectiles"),
+    'mass': (1.1e-3, 'kg', 'projectile mass, (0, 10] kg (default: a 0.22-calibre, 17-grain fragment simulator); rcc and '
+             'fsp when not given: density x the exact solid\'s volume'),
+    'size': (5.59e-3, 'm', 'cube edge or sphere diameter, [1e-4, 0.1] m (default: 0.22 calibre); rcc: its diameter = '
+             'length, 5.588e-3 when not given; fsp: fixed by its drawing (not to be given)'),
+    'density': (7850.0, 'kg/m^3', 'rcc and fsp material density, [1000, 20000] (steel)'),
+    'yaw': (0.0, 'deg', 'angle of the projectile\'s axis to its flight, in the plane of incidence, [-90, 90]'),
+    'obliquity': (0.0, 'deg', 'angle of the flight to the ply\'s normal (towards +x), [0, 80]'),
     'standoff': (0.05e-3, 'm', 'gap between the projectile and the top of the ply at the start'),
     't_end': (1e-4, 's', 'simulated time at most'),
     'stop': (True, '', 'stop at perforation or arrest (else run to t_end)'),
@@ -71,6 +90,8 @@ defaults.update({
     'weibull_m': (0.0, '', 'Weibull modulus of yarn strength (0: none; else [1, 100])'),
     'seed': (1, '', 'seed of the Weibull draw'),
     'safety': (0.7, '', 'O.dt = safety * dt_crit'),
+    'energy_guard': (0.005, '', 'energy-balance error past which O.dt drops to guard_safety * dt_crit for the rest of the run, in [0, energy_limit) (0: off; woven.energy_guard)'),
+    'guard_safety': (0.35, '', 'O.dt = guard_safety * dt_crit once the guard acts, in (0, safety]'),
     'samples': (400, '', 'rows of the time series at most'),
     'vtk_every': (0, '', 'write VTK frames every this many steps (0: first and last frame only; -1: none)'),
     'vtk_rings': (8, '', 'points per section ellipse in the VTK tubes'),
@@ -80,6 +101,17 @@ defaults.update({
     'overlap_limit': (0.1, '', 'allowed largest overlap until the first break / yarn thickness (contact_model=gap)'),
     'out': ('', '', 'output folder (default out/ballistic)'),
     'model': ('woven', '', "'woven', or 'yade': the same ply in YADE's grid elements (woven.yade_grid, docs/yade_grid.md)"),
+    # Back-face deformation (woven.backface, docs/ballistic.md): measured at every sample.
+    'backface': (True, '', 'measure the back-face deformation (cone apex depth, base radius, fronts) at every sample'),
+    # Twice the largest out-of-plane move of decrimping (KM2 706: crimp height 0.1 mm, nodes +-0.05 mm),
+    # which the longitudinal wave brings ahead of the transverse front (measured: 10 um let it through).
+    'backface_w': (1e-4, 'm', 'out-of-plane displacement that counts as moved (cone base radius, transverse front), in (0, 1e-3]'),
+    'backface_strain': (5e-4, '', 'strain that counts as reached by the longitudinal wave, in (0, 0.1]'),
+    # Measured: 5.0 / 6.6 % (transverse / strain front) at 200 m/s, 0.9 / 1.8 % at 400 m/s; the bare
+    # yarn's Smith is 25-27 % off, the membrane's c/sqrt(2) 13-17 % (docs/ballistic.md).
+    'front_tolerance': (0.1, '', 'allowed |measured / theory - 1| of the early front speeds, in (0, 10]'),
+    'pictures': (5, '', 'pictures of the deformed pack rendered with VTK: at t_end k / N (k < N) and at the end (for '
+                 'the default run 20, 40, 60 us and the perforation), N in [0, 100]; 0: none'),
 })
 defaults.update(woven.yade_grid.GRID_KEYS)
 p = read_params(defaults)
@@ -92,22 +124,49 @@ def bad(key, allowed):
 
 if not (math.isfinite(p.V) and 0 < p.V <= 5000):
     bad('V', '(0, 5000] m/s, finite')
-if p.shape not in ('box', 'sphere'):
-    bad('shape', "'box' or 'sphere'")
+if p.shape not in woven.ballistic.SHAPES:
+    bad('shape', ', '.join(woven.ballistic.SHAPES))
 if not (math.isfinite(p.mass) and 0 < p.mass <= 10):
     bad('mass', '(0, 10] kg')
+if p.shape == 'fsp' and 'size' in p.given:
+    bad('size', 'not given for shape fsp (its drawing fixes its size)')
 if not (math.isfinite(p.size) and 1e-4 <= p.size <= 0.1):
     bad('size', '[1e-4, 0.1] m')
+if not (math.isfinite(p.density) and 1000 <= p.density <= 20000):
+    bad('density', '[1000, 20000] kg/m^3')
+if not (math.isfinite(p.yaw) and woven.ballistic.YAW_RANGE[0] <= p.yaw <= woven.ballistic.YAW_RANGE[1]):
+    bad('yaw', '[%g, %g] deg' % woven.ballistic.YAW_RANGE)
+if not (math.isfinite(p.obliquity) and woven.ballistic.OBLIQUITY_RANGE[0] <= p.obliquity <= woven.ballistic.OBLIQUITY_RANGE[1]):
+    bad('obliquity', '[%g, %g] deg' % woven.ballistic.OBLIQUITY_RANGE)
+if p.contact_model == 'paper' and p.shape in ('rcc', 'fsp'):
+    bad('shape', "'box' or 'sphere' with contact_model paper (a cylinder has the gap model's form only)")
+# The projectile: the standard solids' dimensions and mass (woven.projectiles), or a cube / sphere.
+solid = None
+if p.shape in ('rcc', 'fsp'):
+    solid = woven.projectiles.solid(p.shape, p.size if 'size' in p.given else 0.0, p.density)
+    size = 2 * solid['radius']
+    mass = p.mass if 'mass' in p.given else solid['mass']
+else:
+    size, mass = p.size, p.mass
 if not (math.isfinite(p.side) and 1e-3 <= p.side <= 1):
     bad('side', '[1e-3, 1] m (and at most %d nodes in the ply: woven.ballistic.build_ply)' % woven._woven.MAX_WEAVE_NODES)
 if p.clamp not in (0, 2, 4):
     bad('clamp', '4, 2 or 0 edges')
+if not 1 <= p.plies <= woven.pack.MAX_PLIES:
+    bad('plies', '[1, %d] plies' % woven.pack.MAX_PLIES)
+if not (math.isfinite(p.ply_gap) and (0 <= p.ply_gap <= 0.01 or p.ply_gap == -1)):
+    bad('ply_gap', '[0, 0.01] m, or -1 (one yarn thickness)')
+ply_angles = woven.pack.parse_angles(p.ply_angles, p.plies)  # names ply_angles and its range
 if not (math.isfinite(p.standoff) and p.standoff > 0):
     bad('standoff', '(0, inf) m: the projectile starts clear of the ply')
 if not (math.isfinite(p.t_end) and 0 < p.t_end <= 0.01):
     bad('t_end', '(0, 0.01] s')
 if not (0 < p.safety <= 1):
     bad('safety', '(0, 1]')
+if not (0 <= p.energy_guard < p.energy_limit):
+    bad('energy_guard', '[0, energy_limit = %g) (0: off)' % p.energy_limit)
+if not (0 < p.guard_safety <= p.safety):
+    bad('guard_safety', '(0, safety = %g]' % p.safety)
 if p.samples < 10:
     bad('samples', '[10, inf)')
 if not (0 < p.energy_limit < 1):
@@ -118,10 +177,23 @@ if p.vtk_every < -1:
     bad('vtk_every', '-1 (none), 0 (first and last) or a step count')
 if p.mirror_every < 0:
     bad('mirror_every', '0 (off) or a step count')
+woven.contact.check_friction(p)
+if p.model == 'yade' and p.body_friction > 0:  # woven.yade_grid gives the projectile a frictionless material
+    bad('body_friction', "0 with model = 'yade' (its projectile-yarn contacts are frictionless); [0, 2] with model = 'woven'")
+if not (math.isfinite(p.backface_w) and 0 < p.backface_w <= 1e-3):
+    bad('backface_w', '(0, 1e-3] m')
+if not (math.isfinite(p.backface_strain) and 0 < p.backface_strain <= 0.1):
+    bad('backface_strain', '(0, 0.1]')
+if not (math.isfinite(p.front_tolerance) and 0 < p.front_tolerance <= 10):
+    bad('front_tolerance', '(0, 10]')
+if not (0 <= p.pictures <= 100):
+    bad('pictures', '[0, 100] (0: none)')
 if not (math.isfinite(p.fine_radius)):
     bad('fine_radius', '[0, inf) m (0: from the transverse wave), or < 0 for uniform cp_per_span')
 if p.fine_radius >= 0 and not (1 <= p.cp_coarse <= p.cp_per_span):
     bad('cp_coarse', '[1, cp_per_span = %d] CPs between crossings outside fine_radius' % p.cp_per_span)
+if p.model == 'yade' and (p.plies > 1 or any(ply_angles) or p.shape in ('rcc', 'fsp') or p.yaw or p.obliquity):
+    bad('model', "'woven' for packs, rcc, fsp, yaw and obliquity (model yade: one ply, a cube or a sphere, face on)")
 d = out_dir('ballistic', p)
 if p.model == 'yade':
     sys.exit(woven.yade_scenes.ballistic(p, d, [k for k in WEAVE_KEYS if k in p], CONTACT_KEYS))
@@ -131,21 +203,33 @@ O.engines = []
 O.bodies.clear()
 weave_args = {k: p[k] for k in WEAVE_KEYS if k in p}
 if p.fine_radius == 0:
-    weave_args['fine_radius'] = woven.ballistic.fine_radius_from_waves(weave_args, p.V, p.t_end, p.shape, p.size)
-ply = woven.ballistic.build_ply(weave_args, {k: p[k] for k in CONTACT_KEYS}, side=p.side,
+    weave_args['fine_radius'] = woven.ballistic.fine_radius_from_waves(weave_args, p.V, p.t_end, p.shape, size)
+contact_args = {k: p[k] for k in CONTACT_KEYS}
+if p.plies > 1 and 'max_iterations' not in p.given:
+    # Gauss-Seidel carries a push one contact layer per sweep, and a pack stacks 2 yarn layers per ply
+    # between the projectile and the last ply: 10 sweeps per ply (docs/ballistic.md; 4 plies at 10
+    # sweeps let the projectile 0.48 thickness into the yarns and the projection put in 6 % of KE0).
+    contact_args['max_iterations'] = woven.pack.sweeps_for(p.plies, p.max_iterations)
+ply = woven.ballistic.build_ply(weave_args, contact_args, side=p.side,
                                 clamp=p.clamp, state=p.state,
                                 breakage=dict(strain=p.break_strain, filter_length=p.break_filter,
-                                              weibull_m=p.weibull_m, seed=p.seed))
+                                              weibull_m=p.weibull_m, seed=p.seed),
+                                plies=p.plies, ply_gap=None if p.ply_gap == -1 else p.ply_gap, ply_angles=ply_angles)
 w, eng, settle_left = ply.weave, ply.engine, ply.settle_left
 X0, thickness, z_mid = ply.X0, ply.thickness, ply.z_mid
-half = 0.5 * p.size
-proj = woven.ballistic.add_projectile(ply, p.shape, p.mass, p.size, p.V, p.standoff)
+proj = woven.ballistic.add_projectile(ply, p.shape, mass, size, p.V, p.standoff, p.yaw, p.obliquity, solid)
+# How far it reaches below and above its centre of mass at the start (the nose, and the rear that
+# must pass the last ply): half the cube's edge or the sphere's radius in the scene as it was.
+low, high = woven.ballistic.projectile_extent(p.shape, size, proj.state.ori, solid)
+if p.shape in ('box', 'sphere') and p.yaw == 0 and p.obliquity == 0:
+    low = high = 0.5 * size
 
 O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
 woven.attach(eng, set_dt=True, safety=p.safety)
-steps_max = int(math.ceil(p.t_end / O.dt))
-every = max(1, steps_max // p.samples)
-KE0 = 0.5 * p.mass * p.V ** 2
+every = max(1, int(math.ceil(p.t_end / O.dt)) // p.samples)
+guard = EnergyGuard(eng, p.energy_guard, p.guard_safety)
+steps_max = int(math.ceil(p.t_end / guard.smallest_dt()))  # the run stops at t_end (watch)
+KE0 = 0.5 * mass * p.V ** 2
 E0 = eng.energy()
 fabric_initial = E0['initial']
 
@@ -171,26 +255,49 @@ rows = []
 
 
 def nose_z():
-    return proj.state.pos[2] - half  # the cube's face or the sphere's pole
+    return proj.state.pos[2] - low  # the cube's face, the sphere's pole, the cylinder's lowest point at the start
 
 
 def sample():
     E = eng.energy()
     s = eng.collision_stats()
     vz = proj.state.vel[2]
-    ke_p = 0.5 * p.mass * proj.state.vel.squaredNorm()
+    ke_p = projectile_ke()
     dissipated = E['contact']
     row = dict(t=O.time, vz=vz, z=proj.state.pos[2], ke_projectile=ke_p, ke_fabric=E['kinetic'], elastic=E['elastic'],
-               dissipated_impulses=dissipated, damped=E['damped'], released=E['released'],
+               dissipated_impulses=dissipated, friction=E['friction'], damped=E['damped'], released=E['released'],
                contacts=s['contacts'], body_contacts=s['body_contacts'], broken=eng.broken_elements,
                projection=E['projection'], overlap=s['penetration'], body_overlap=s['body_penetration'],
-               balance=(ke_p + E['kinetic'] + E['elastic'] + E['damped'] + dissipated + E['released'] + E['spring']
+               balance=(ke_p + E['kinetic'] + E['elastic'] + E['damped'] + dissipated + E['friction'] + E['released'] + E['spring']
                         + E['projection'] - KE0 - E['initial'] - (E['work'] - E['body_work'])) / KE0)
     rows.append(row)
     plot.addData(**row)
+    finer = guard.check(row['balance'])
+    if finer > 1:  # as many rows per simulated time as before
+        sampler.iterPeriod = max(1, int(round(sampler.iterPeriod * finer)))
+    if bf is not None:
+        bf.measure(O.time)
 
 
 meter = OverlapMeter(eng, thickness)
+
+
+def projectile_ke():
+    """The projectile's kinetic energy [J]: translation, and rotation 1/2 w.I w (principal frame)."""
+    ke = 0.5 * mass * proj.state.vel.squaredNorm()
+    w = proj.state.ori.conjugate() * proj.state.angVel
+    rot = 0.5 * sum(proj.state.inertia[k] * w[k] ** 2 for k in range(3))
+    return ke + rot if rot != 0 else ke
+pk = ply.pack
+pack_start = None
+if pk is not None:
+    # Built without overlap, checked at step 0: the clear gap between neighbouring plies (their
+    # sections' reach along z) and the largest CP overlap in the whole pack after settling.
+    elems_per_ply = pk.elements[0][1]
+    gaps = woven.pack.clear_gaps(eng, pk)
+    pack_start = {'clear_gap_min': min(gaps), 'clear_gap_max': max(gaps), 'overlap': eng.overlap(),
+                  'pitch': pk.pitch, 'angles': pk.angles}
+    state['ply_touched'], state['touching'] = [False] * pk.plies, []
 
 
 def watch():
@@ -198,6 +305,11 @@ def watch():
     meter.sample()
     s = eng.collision_stats()
     state['min_nose'] = min(state['min_nose'], nose_z())
+    if pk is not None and s['body_contacts'] > 0:  # which plies the projectile touches (the pack's books)
+        plies_now = np.unique(woven.body_contacts(eng)['cp'] // elems_per_ply)
+        state['touching'] = [int(k) for k in plies_now]
+        for k in plies_now:
+            state['ply_touched'][k] = True
     if s['body_contacts'] > 0:
         state['contact_seen'] = True
         state['clear'] = 0
@@ -210,8 +322,8 @@ def watch():
         state['vz_ref'], state['steady'] = vz, 0
     else:
         state['steady'] += 1
-    rear = proj.state.pos[2] + half
-    through = rear < z_mid - thickness
+    rear = proj.state.pos[2] + high
+    through = rear < ply.z_exit - thickness
     if state['contact_seen'] and through and (state['clear'] >= p.clear_steps or state['steady'] >= p.clear_steps):
         state['outcome'] = 'perforated'
     elif state['contact_seen'] and proj.state.vel[2] >= 0:
@@ -226,7 +338,11 @@ def watch():
               % (O.time * 1e6, p.t_end * 1e6, proj.state.vel[2], s['contacts'], s['body_contacts'],
                  eng.broken_elements, time.time() - state['wall0']))
         sys.stdout.flush()
-    if p.stop and state['outcome'] != 'running':
+    if shots is not None:
+        shots.due(O.time)
+    if bf is not None and bf.dense():
+        bf.measure(O.time)
+    if (p.stop and state['outcome'] != 'running') or O.time + O.dt >= p.t_end * (1 - 1e-12):
         O.pause()
 
 
@@ -237,13 +353,19 @@ if p.vtk_every >= 0:
     vtk_rec.write(0.0)
 
 
+bf = woven.backface.BackFace(w, X0, ply.centre, (0, 0, -1), p.backface_w, p.backface_strain,
+                             dense_radius=0.4 * min(np.ptp(X0[:, 0]), np.ptp(X0[:, 1]))) if p.backface else None
+shots = woven.render.Pictures(eng, d, p.t_end, p.pictures, p.vtk_rings) if p.pictures > 0 else None
+
+
 def vtk_frame():
     vtk_rec.write(O.time)
 
 
 import __main__
 __main__.sample, __main__.watch, __main__.vtk_frame = sample, watch, vtk_frame
-O.engines = O.engines + [PyRunner(command='watch()', iterPeriod=1), PyRunner(command='sample()', iterPeriod=every)]
+sampler = PyRunner(command='sample()', iterPeriod=every)
+O.engines = O.engines + [PyRunner(command='watch()', iterPeriod=1), sampler]
 if vtk_rec is not None and p.vtk_every > 0:
     O.engines = O.engines + [PyRunner(command='vtk_frame()', iterPeriod=p.vtk_every)]
 
@@ -267,7 +389,7 @@ if vtk_rec is not None:
 E = eng.energy()
 stats = eng.collision_stats()
 v_res = -proj.state.vel[2]
-ke_p = 0.5 * p.mass * proj.state.vel.squaredNorm()
+ke_p = projectile_ke()
 absorbed = KE0 - ke_p
 balance = rows[-1]['balance']
 perforated = state['outcome'] == 'perforated'
@@ -285,10 +407,13 @@ with atomic_open(os.path.join(d, 'breaks.csv')) as f:
 
 cp_steps = eng.n_elements * O.iter
 phases = {k[8:]: stats[k] for k in stats if k.startswith('seconds_')}
+if bf is not None:
+    phases['backface'] = bf.seconds  # the back-face measures, inside the run's wall time
 phases['integration_and_rest'] = max(0.0, wall - sum(phases.values()))
 measured = {
     'outcome': state['outcome'], 'perforated': perforated,
     'residual_velocity': v_res if perforated else 0.0, 'projectile_velocity_end': v_res,
+    'projectile_speed_end': proj.state.vel.norm(),  # |v| (the velocities above are along -z: oblique flights)
     'absorbed_energy': absorbed, 'energy_balance_error': balance,
     'max_penetration': z_mid - state['min_nose'],
     'broken_elements': eng.broken_elements, 'broken_yarns': eng.broken_yarns,
@@ -298,35 +423,93 @@ measured = {
     'wall_seconds': wall, 'cpu_seconds': cpu, 'cp_steps_per_second': cp_steps / wall if wall > 0 else None,
     'phase_seconds': phases, 'mirror_seconds': state['mirror_seconds'],
     'energy': {'projectile_initial': KE0, 'projectile_final': ke_p, 'fabric_kinetic': E['kinetic'],
-               'fabric_elastic': E['elastic'], 'dissipated_impulses': E['contact'], 'damped': E['damped'],
+               'fabric_elastic': E['elastic'], 'dissipated_impulses': E['contact'], 'friction': E['friction'], 'damped': E['damped'],
                'released_breakage': E['released'], 'fabric_initial': fabric_initial,
                'projection': E['projection']},
     'max_body_penetration': stats['max_body_penetration'], 'max_yarn_penetration': stats['max_penetration'],
     'settle_overlap': settle_left, 'yarn_thickness': thickness,
     'overlap': meter.summary(),
+    'energy_guard': guard.summary(),
 }
+measured['max_iterations'] = contact_args['max_iterations']
+measured['projectile'] = {'shape': p.shape, 'mass': mass, 'size': size, 'yaw': p.yaw, 'obliquity': p.obliquity,
+                          'inertia': list(proj.state.inertia), 'start_reach_below': low, 'start_reach_above': high}
+if solid is not None:
+    measured['projectile'].update({k: solid[k] for k in ('radius', 'half_length', 'chisel_angle', 'land_half_width',
+                                                         'density', 'volume', 'centroid_z')})
+    measured['projectile']['solid_mass'] = solid['mass']
+if pk is not None:
+    books = woven.pack.ply_books(eng, pk)
+    # The ply that stopped the projectile: once it is arrested, the deepest ply it touches (the plies
+    # above it are perforated or pushed aside; those below are pushed by the ply above, not by the
+    # projectile); none when it perforated the pack or still moves on at t_end.
+    deepest = max(state['touching']) if state['touching'] else None
+    stopper = deepest if state['outcome'] == 'arrested' else None
+    for k, b in enumerate(books):
+        b['angle'] = pk.angles[k]
+        b['touched_by_projectile'] = state['ply_touched'][k]
+    measured['pack'] = {'plies': pk.plies, 'pitch': pk.pitch, 'start': pack_start, 'per_ply': books,
+                        'stopped_by_ply': stopper, 'deepest_ply_in_contact_at_end': deepest,
+                        'shared': {'dissipated_impulses': E['contact'], 'damped': E['damped'],
+                                   'projection': E['projection'], 'work_of_loads': E['work'] - E['body_work']},
+                        'sum_absorbed_per_ply': sum(b['absorbed'] for b in books),
+                        'areal_density': w.summary['areal_density']}
 info = eng.yarn(w.warp_yarns[0])
 reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-reference.md (Nilakantan et al.)
              'smith_strain_at_V': woven.theory.smith(p.V, info['E'], info['rho'])['strain'],
              'smith_critical_velocity': woven.theory.smith_critical_velocity(p.break_strain or info['failure_strain'],
                                                                             info['E'], info['rho']),
              'failure_strain': p.break_strain or info['failure_strain']}
-units = {'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
+units = {'projectile_speed_end': 'm/s', 'projectile': 'kg, m, deg, kg m^2, kg/m^3, m^3, rad (chisel_angle)',
+         'pack': 'J, m, deg (per_ply: energies at the end of the run; shared: entries not split by ply)',
+         'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
          'simulated_time': 's', 'dt': 's', 'fine_radius': 'm', 'wall_seconds': 's', 'cpu_seconds': 's', 'cp_steps_per_second': '1/s', 'phase_seconds': 's',
          'energy': 'J', 'energy_balance_error': 'fraction of the projectile\'s initial kinetic energy',
-         'max_body_penetration': 'm', 'max_yarn_penetration': 'm', 'overlap': woven.overlap.UNITS, 'yarn_thickness': 'm', 'first_break_time': 's', 'mirror_seconds': 's'}
+         'max_body_penetration': 'm', 'max_yarn_penetration': 'm', 'overlap': woven.overlap.UNITS, 'yarn_thickness': 'm', 'first_break_time': 's', 'mirror_seconds': 's',
+         'pictures_seconds': 's'}
+if pk is not None:
+    checks_pack = {'pack_built_apart': {
+        'value': pack_start['clear_gap_min'], 'limit': 0.0, 'passed': bool(pack_start['clear_gap_min'] >= 0),
+        'what': 'smallest clear gap between neighbouring plies at step 0 (sections\' reach along z) [m]'}}
 checks = {'energy_balance': {'value': balance, 'limit': p.energy_limit, 'passed': bool(abs(balance) <= p.energy_limit),
                              'what': '(final kinetic + elastic + dissipated + released - initial) / initial kinetic energy'},
           'momentum_direction': {'value': v_res, 'limit': p.V, 'passed': bool(v_res <= p.V * (1 + 1e-9)),
                                  'what': 'the fabric only slows the projectile'}}
+if pk is not None:
+    checks.update(checks_pack)
 if p.contact_model == 'gap':  # the paper's response lets yarns into each other: its overlap is reported, not checked
-    # Checked up to the first broken element; after it, whipping broken ends still overlap (up to
-    # 3-5 thicknesses: docs/collisions.md), reported as yarn_max_rel / body_max_rel.
+    # Checked up to the first broken element; after it, broken pieces whipping at 1000 m/s can read
+    # a little more (contact_sweep.py checks whole runs: docs/collisions.md), reported as
+    # yarn_max_rel / body_max_rel.
     ov = measured['overlap']
     worst = max(ov['yarn_max_before_break_rel'], ov['body_max_before_break_rel'])
     checks['overlap'] = {'value': worst, 'limit': p.overlap_limit, 'passed': bool(worst <= p.overlap_limit),
                          'what': 'largest yarn-yarn and projectile-yarn overlap after flattening, until the first '
                                  'broken element, / yarn thickness'}
+
+if bf is not None:
+    S_t, S_v = np.array([r['t'] for r in rows]), np.array([r['vz'] for r in rows])
+    bf_m, bf_r, bf_c = woven.backface.compare(bf, S_t, S_v, 0.5 * size,
+                                              0.5 * min(np.ptp(X0[:, 0]), np.ptp(X0[:, 1])), info['E'], info['rho'],
+                                              t_max=log[0]['time'] if log else None, tolerance=p.front_tolerance,
+                                              friction=p.friction)
+    measured['backface'], reference['backface'] = bf_m, bf_r
+    units['backface'] = dict(woven.backface.UNITS, apex_depth_end='m', base_radius_end='m', strain_front_speed='m/s',
+                             transverse_front_speed='m/s', base_radius_speed='m/s')
+    checks.update(bf_c)
+    woven.backface.write_series(bf, os.path.join(d, 'backface.csv'))
+    woven.backface.chart(bf, os.path.join(d, 'backface.png'), bf_m, bf_r,
+                         '%s %.3g g at %.0f m/s' % (p.shape, p.mass * 1e3, p.V))
+if shots is not None:
+    try:  # a picture that cannot be rendered fails the run's check, not the run
+        t_pic = time.time()
+        measured['pictures'] = shots.finish(O.time, p.break_strain or info['failure_strain'])
+        measured['pictures_seconds'] = time.time() - t_pic
+        checks['pictures'] = {'value': len(measured['pictures']), 'limit': p.pictures, 'passed': True,
+                              'what': 'pictures of the deformed pack written'}
+    except (RuntimeError, OSError, subprocess.TimeoutExpired) as ex:
+        print('ballistic: pictures failed:', ex)
+        checks['pictures'] = {'value': 0, 'limit': p.pictures, 'passed': False, 'what': 'pictures written: %s' % ex}
 
 import matplotlib
 matplotlib.use('Agg')
@@ -336,9 +519,10 @@ t_us = S[:, col['t']] * 1e6
 fig, ax = plt.subplots(2, 2, figsize=(12, 8))
 ax[0, 0].plot(t_us, -S[:, col['vz']], 'k-')
 ax[0, 0].set_ylabel('projectile velocity [m/s]')
-ax[0, 0].set_title('%s %.3g g at %.0f m/s: %s' % (p.shape, p.mass * 1e3, p.V, state['outcome']))
+ax[0, 0].set_title('%s %.3g g at %.0f m/s: %s' % (p.shape, mass * 1e3, p.V, state['outcome']))
 for k, lab in (('ke_projectile', 'projectile kinetic'), ('ke_fabric', 'fabric kinetic'), ('elastic', 'fabric elastic'),
-               ('dissipated_impulses', 'dissipated by impulses'), ('released', 'released by breakage')):
+               ('dissipated_impulses', 'dissipated by impulses'), ('friction', 'work of friction'),
+               ('released', 'released by breakage')):
     ax[0, 1].plot(t_us, S[:, col[k]], label=lab)
 ax[0, 1].set_ylabel('energy [J]')
 ax[0, 1].legend(fontsize=8)

@@ -1,6 +1,7 @@
 # Benchmark of the default ballistic scene (scripts/ballistic.py's defaults: KM2 706 single ply 50.8 mm,
 # clamped on 4 edges, cube 1.1 g at 200 m/s), all in one process on one core:
 #   yade -n -x scripts/bench_ballistic.py [t_end=1e-4] [chain_steps=300] [threads=1] [out=DIR]
+#   yade -n -x scripts/bench_ballistic.py plies=8 V=400 shape=rcc t_end=2e-5     # the pack case (docs/ballistic.md)
 # 1. baseline: the same ply's springs and integration alone (collisions and breakage off), chain_steps steps;
 # 2. the coupled scene for t_end without stopping at perforation: wall time, CP-steps per second and
 #    the time by phase (refit, broad, narrow, response from the collision stage's clocks; springs,
@@ -16,6 +17,8 @@ import time
 
 import woven
 import woven.ballistic
+import woven.pack
+import woven.projectiles
 from woven.params import read_params
 from woven.output import out_dir, write_summary
 from woven.contact import CONTACT_KEYS
@@ -25,10 +28,21 @@ p = read_params({'t_end': (1e-4, 's', 'simulated time of the coupled run'),
                  'side': (0.0508, 'm', 'ply side'), 'cp_per_span': (1, '', 'CPs between crossings (the scene\'s default: 1)'),
                  'goal_seconds': (30.0, 's', 'goal: wall time for 100 us of simulated time'),
                  'broad_phase': ('grid', '', "'grid' (the scene's default), 'tree' or 'sap'"),
+                 'plies': (1, '', 'plies in the pack, [1, 40] (woven.pack; every ply clamped on 4 edges)'),
+                 'ply_angles': ('0', 'deg', 'in-plane angle of each ply, comma-separated (one for all)'),
+                 'V': (200.0, 'm/s', 'impact speed, (0, 5000]'),
+                 'shape': ('box', '', "the scene's projectile: 'box' (1.1 g cube), 'sphere', 'rcc' or 'fsp' (woven.projectiles)"),
                  'threads': (1, '', 'threads of a second coupled run compared with one thread, in [1, 64] (1: one run only)'),
                  'out': ('', '', 'output folder (default out/bench_ballistic)')})
 if not (isinstance(p.threads, int) and 1 <= p.threads <= 64):
     raise ValueError('threads = %r is invalid: allowed an integer in [1, 64]' % (p.threads,))
+if not 1 <= p.plies <= woven.pack.MAX_PLIES:
+    raise ValueError('plies = %r is invalid: allowed [1, %d]' % (p.plies, woven.pack.MAX_PLIES))
+if not (0 < p.V <= 5000):
+    raise ValueError('V = %r is invalid: allowed (0, 5000] m/s' % p.V)
+if p.shape not in woven.ballistic.SHAPES:
+    raise ValueError('shape = %r is invalid: allowed %s' % (p.shape, ', '.join(woven.ballistic.SHAPES)))
+ply_angles = woven.pack.parse_angles(p.ply_angles, p.plies)
 d = out_dir('bench_ballistic', p)
 if p.threads > 1 and woven.openmp_threads() < p.threads:
     print('bench_ballistic: WARNING: OpenMP has %d thread(s) here (yade -j %d missing?): idle threads sleep between '
@@ -37,6 +51,8 @@ weave_args = {'preset': 'km2_706', 'nx': 0, 'ny': 0, 'cp_per_span': p.cp_per_spa
 # The scene's contact settings (scripts/ballistic.py)
 contact_args = {k: v[0] for k, v in CONTACT_KEYS.items()}
 contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=10, skin=1e-5, broad_phase=p.broad_phase)
+if p.plies > 1:  # the scene's sweeps for a pack (scripts/ballistic.py)
+    contact_args['max_iterations'] = woven.pack.sweeps_for(p.plies)
 
 # 1. baseline: springs and integration of the same ply, collisions off
 O.engines = []
@@ -59,8 +75,13 @@ def coupled(threads):
     O.bodies.clear()
     O.resetTime()
     ply = woven.ballistic.build_ply(weave_args, contact_args, side=p.side, clamp=4,
-                                    breakage=dict(strain=0.0, filter_length=-4.0, weibull_m=0.0, seed=1))
-    proj = woven.ballistic.add_projectile(ply)
+                                    breakage=dict(strain=0.0, filter_length=-4.0, weibull_m=0.0, seed=1),
+                                    plies=p.plies, ply_angles=ply_angles)
+    if p.shape in ('rcc', 'fsp'):
+        solid = woven.projectiles.solid(p.shape)
+        proj = woven.ballistic.add_projectile(ply, p.shape, solid['mass'], 2 * solid['radius'], p.V, solid=solid)
+    else:
+        proj = woven.ballistic.add_projectile(ply, p.shape, V=p.V)
     O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
     woven.attach(ply.engine)
     t0 = time.perf_counter()

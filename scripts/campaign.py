@@ -20,6 +20,7 @@ import time
 import numpy as np
 import woven
 import woven.campaign as campaign
+import woven.contact
 from woven.params import read_params
 from woven.output import out_dir, savefig, write_summary
 
@@ -83,9 +84,11 @@ for tok in shlex.split(p.scene.replace(';', ' ')):
     if k in ('V', 'seed', 'weibull_m', 't_end', 'out'):
         bad('scene', "keys other than V, seed, weibull_m, t_end and out (the campaign's own keys set them)")
     scene[k] = v
+woven.contact.check_friction(scene)  # friction and body_friction refused before any run starts
 d = out_dir('campaign', p)
 # What every run gets besides V and seed: no VTK and no progress lines (the campaign has its own bar).
-keys = {'weibull_m': float(p.weibull_m), 't_end': float(p.t_end), 'vtk_every': -1, 'progress': 0.0}
+# No pictures either (a render per run; the back-face figures are still in each summary.json).
+keys = {'weibull_m': float(p.weibull_m), 't_end': float(p.t_end), 'vtk_every': -1, 'progress': 0.0, 'pictures': 0}
 keys.update(scene)
 runs = campaign.plan(velocities, seeds, keys, os.path.join(os.path.abspath(d), 'runs'))
 

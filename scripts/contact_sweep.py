@@ -17,6 +17,7 @@ import time
 
 import woven
 import woven.campaign as campaign
+import woven.contact
 from woven.params import read_params
 from woven.output import atomic_open, out_dir, write_summary
 
@@ -24,6 +25,8 @@ p = read_params({
     'quick': (False, '', '1: six scenes of the 12.7 mm ply (about a minute of runs); 0: the whole matrix (30 scenes)'),
     'jobs': (1, '', 'runs at once, in [1, 64]'),
     'contact_model': ('gap', '', "'gap' (default) or 'paper': the contact model of every run"),
+    'friction': (0.0, '', 'Coulomb coefficient between yarns of every run, in [0, 2]'),
+    'body_friction': (0.0, '', 'Coulomb coefficient between the projectile and the yarns of every run, in [0, 2]'),
     'overlap_limit': (0.1, '', 'allowed largest overlap / yarn thickness, in (0, 100]'),
     'energy_limit': (0.01, '', 'allowed energy-balance error / initial kinetic energy, in (0, 1)'),
     'yade': ('yade', '', 'the YADE command the runs start'),
@@ -43,6 +46,7 @@ if not (math.isfinite(p.overlap_limit) and 0 < p.overlap_limit <= 100):
     bad('overlap_limit', '(0, 100] yarn thicknesses')
 if not (math.isfinite(p.energy_limit) and 0 < p.energy_limit < 1):
     bad('energy_limit', '(0, 1)')
+woven.contact.check_friction(p)
 d = out_dir('contact_sweep', p)
 STEEL = 7850.0  # kg/m^3
 
@@ -52,7 +56,8 @@ def scene(shape, size_mm, V, cp, side_mm):
     volume = size ** 3 if shape == 'box' else math.pi / 6 * size ** 3
     keys = {'shape': shape, 'size': size, 'mass': float('%.4g' % (STEEL * volume)), 'V': float(V),
             'cp_per_span': cp, 'side': side_mm * 1e-3, 'contact_model': p.contact_model, 'progress': 0.0,
-            'vtk_every': -1, 'overlap_limit': 100.0, 'energy_limit': 0.99}
+            'friction': p.friction, 'body_friction': p.body_friction,
+            'vtk_every': -1, 'overlap_limit': 100.0, 'energy_limit': 0.99, 'pictures': 0}
     name = '%s%.1f-V%04d-cp%d-ply%.1f' % (shape, size_mm, V, cp, side_mm)
     return {'name': name, 'keys': keys, 'out': os.path.join(d, 'runs', name)}
 

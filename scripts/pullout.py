@@ -245,7 +245,7 @@ if phase['E_pull0'] is not None and len(C) > 5:
     W_dead = W_back + W_pre
     W_engine = E1['work'] - E0['work']
     W_grip = W_engine - W_dead
-    d_books = {k: E1[k] - E0[k] for k in ('kinetic', 'elastic', 'damped', 'contact', 'projection', 'spring', 'released')}
+    d_books = {k: E1[k] - E0[k] for k in ('kinetic', 'elastic', 'damped', 'contact', 'friction', 'projection', 'spring', 'released')}
     residual = sum(d_books.values()) - W_engine  # = change of the engine's balance error over the pull
     turnover = abs(W_grip) + abs(W_back) + abs(W_pre) + sum(abs(v) for v in d_books.values())
     balance = residual / turnover if turnover > 0 else 0.0
@@ -260,7 +260,7 @@ if phase['E_pull0'] is not None and len(C) > 5:
         'grip_travel': float(disp[-1]), 'far_end_displacement_x': far_moved,
         'energy': {'grip_work': W_grip, 'back_tension_work': W_back, 'pretension_work': W_pre, 'kinetic_change': d_books['kinetic'],
                    'elastic_change': d_books['elastic'], 'damped': d_books['damped'],
-                   'dissipated_contacts': d_books['contact']},
+                   'dissipated_contacts': d_books['contact'], 'friction': d_books['friction']},
         'energy_balance_error': balance, 'final_overlap': eng.overlap(),
         'max_transient_penetration': eng.collision_stats()['max_penetration'],
         'max_unresolved_impulse_rows': eng.collision_stats()['max_unresolved'],

@@ -19,6 +19,7 @@ from woven.params import read_params
 from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS
 from woven.contact import CONTACT_KEYS
+import woven.contact
 import woven.yade_grid
 import woven.yade_scenes
 
@@ -55,6 +56,7 @@ if not (p.strain_end < 0 or 0 < p.strain_end <= 0.2):
     raise ValueError('strain_end = %r is invalid: allowed (0, 0.2], or < 0 for the built warp crimp + 0.3 %%' % p.strain_end)
 if p.samples < 10:
     raise ValueError('samples = %r is invalid: allowed [10, inf)' % p.samples)
+woven.contact.check_friction(p)
 d = out_dir('tension', p)
 weave_args = {k: p[k] for k in WEAVE_KEYS}
 contact_args = {k: p[k] for k in CONTACT_KEYS}

@@ -100,6 +100,7 @@ void ChainDynamics::start() {
   books_.damped = 0;
   books_.work = 0;
   books_.contact = 0;
+  books_.friction = 0;
   books_.contactInput = 0;
   books_.released = 0;
   books_.projection = 0;
@@ -309,6 +310,8 @@ void ChainDynamics::step(Real dt, StepHook* hook) {
     books_.projection -= pe, books_.contactInput += std::max(Real(0), pe);
     const Real bw = hook->takeBodyWork();
     books_.work += bw, books_.bodyWork += bw, books_.contact += bw;
+    // Friction's share of the contact take gets its own book (it is 0 without friction: contact keeps its bits).
+    if (const Real fw = hook->takeFrictionWork(); fw != 0) books_.friction += fw, books_.contact -= fw;
   }
   if (!std::isfinite(ke)) failNonFinite();
   books_.kinetic = ke;

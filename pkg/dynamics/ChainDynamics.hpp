@@ -44,6 +44,9 @@ class StepHook {
   /// Spring energy the hook's position projection put in since the last take [J] (booked as
   /// EnergyBooks::projection, not as contact dissipation).
   virtual Real takeProjectionEnergy() { return 0; }
+  /// Of the energy the calls since the last take took out, what friction took [J] (booked as
+  /// EnergyBooks::friction instead of contact).
+  virtual Real takeFrictionWork() { return 0; }
   /// Energy the hook's contact springs hold now, after beforeDrift [J] (EnergyBooks::spring); what
   /// they hold at its first call joins EnergyBooks::initial. Kept out of the energy beforeDrift returns, so that an unstable
   /// spring shows in the books' total (the blow-up check) instead of being booked away as contact input.

@@ -95,6 +95,11 @@ class CollisionStage : public StepHook {
     bodyWork_ = 0;
     return w;
   }
+  Real takeFrictionWork() override {
+    const Real w = frictionWork_;
+    frictionWork_ = 0;
+    return w;
+  }
 
   /// Rigid bodies colliding with the fabric. Each step they are taken at the start of the step
   /// (pose x_n, velocities v_{n+1/2}) and left at its end (x_{n+1}, drifted with the velocities the
@@ -146,10 +151,10 @@ class CollisionStage : public StepHook {
   struct PairMemo {
     bool memo = false, side = false;
     // Its contact points at the last narrow phase that measured it (1 or 2; 0: measure forgotten,
-    // the pair was not measured since its boxes parted): A's place sA, the normal and the sections'
-    // measure hA + hB [m] at each.
+    // the pair was not measured since its boxes parted): their places sA, sB, the normal and the
+    // sections' measure hA + hB [m] at each.
     int memoPoints = 0;
-    Real memoS[2] = {0, 0}, memoMeasure[2] = {0, 0};
+    Real memoS[2] = {0, 0}, memoT[2] = {0, 0}, memoMeasure[2] = {0, 0};
     Vec3 memoNormal[2] = {Vec3::Zero(), Vec3::Zero()};
   };
   // A pair's last static contact (model Paper, contact_cache > 0: ContactParams::cacheDistance).
@@ -184,6 +189,7 @@ class CollisionStage : public StepHook {
   std::size_t heldFor_ = 0;                                       // the body count they were measured with
   bool forgetHeld_ = false;                                       // invalidateCache: no memory at the next step
   Real bodyWork_ = 0;
+  Real frictionWork_ = 0;  // the impulses' tangential parts took since the last take [J]
   std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per chunk of pairs
   std::vector<long> reused_;                    // carried contacts per chunk of pairs
   std::vector<Real> capacity_;                  // flatten: both CPs' flattening capacity per contact [m]

@@ -105,7 +105,10 @@ std::string engineSnapshot(FabricEngine& e) {
     for (const RigidBody& b : st->bodies) {
       o.put(static_cast<std::int64_t>(b.id)), o.put(static_cast<std::uint64_t>(b.parts.size()));
       for (const RigidPart& q : b.parts)
+      {
         o.put(q.type), o.put(q.halfSize), o.put(q.radius), o.put(q.offset), o.put(q.ori.coeffs().eval());
+        if (q.type == RigidPart::Type::Cylinder) o.put(q.halfLength), o.put(q.chiselAngle), o.put(q.landHalfWidth);
+      }
       o.put(b.mass), o.put(b.inertia), o.put(b.pos);
       o.put(b.ori.coeffs().eval()), o.put(b.vel), o.put(b.angVel);
     }
@@ -190,6 +193,8 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
       for (RigidPart& q : b.parts) {
         q.type = in.get<RigidPart::Type>(), q.halfSize = in.get<Vec3>(), q.radius = in.get<Real>();
         q.offset = in.get<Vec3>(), q.ori.coeffs() = in.get<Eigen::Matrix<Real, 4, 1>>();
+        if (q.type == RigidPart::Type::Cylinder)  // written only for cylinders: older snapshots have none
+          q.halfLength = in.get<Real>(), q.chiselAngle = in.get<Real>(), q.landHalfWidth = in.get<Real>();
       }
       b.mass = in.get<Real>();
       b.inertia = in.get<Vec3>(), b.pos = in.get<Vec3>(), b.ori.coeffs() = in.get<Eigen::Matrix<Real, 4, 1>>();

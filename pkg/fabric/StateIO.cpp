@@ -14,7 +14,7 @@ namespace woven {
 namespace {
 
 const char kMagic3[8] = {'W', 'O', 'V', 'E', 'N', 'S', 'T', '3'};
-constexpr std::uint32_t kVersion = 3;
+constexpr std::uint32_t kVersion = 4;  // 4: the friction book after the other 11 (3 has none)
 constexpr std::uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
 
 std::uint64_t fnv(const void* data, std::size_t n, std::uint64_t h = kFnvOffset) {
@@ -178,6 +178,7 @@ void saveState(const std::string& path, const KinematicState& s) {
   const EnergyBooks& b = s.books;
   for (Real v : {b.kinetic, b.elastic, b.damped, b.work, b.bodyWork, b.contact, b.contactInput, b.spring, b.released, b.initial, b.projection})
     w.put(v);
+  w.put(b.friction);
   const BreakageParams& p = s.breakage.params;
   w.put(std::uint8_t(p.enabled)), w.put(p.threshold), w.put(p.filterLength), w.put(p.weibullModulus), w.put(p.seed);
   w.put(static_cast<std::int64_t>(s.breakage.strength.size())), w.arr(s.breakage.strength);
@@ -215,7 +216,8 @@ KinematicState loadState(const std::string& path, long expectNodes) {
   if (buf[7] != '3') r.fail(std::string("format WOVENST") + buf[7] + " is not supported (re-save it with this woven)");
   r.get<std::uint64_t>();  // the magic
   const std::uint32_t version = r.get<std::uint32_t>();
-  if (version != kVersion) r.fail("version " + fmt(version) + ", this woven reads version " + fmt(kVersion));
+  if (version != kVersion && version != 3)
+    r.fail("version " + fmt(version) + ", this woven reads versions 3 and " + fmt(kVersion));
   r.get<std::uint32_t>();
   // The checksum first: every later check may then trust the sizes it reads.
   if (buf.size() < 16) r.fail("the file is truncated");
@@ -250,6 +252,7 @@ KinematicState loadState(const std::string& path, long expectNodes) {
   EnergyBooks& b = s.books;
   for (Real* v : {&b.kinetic, &b.elastic, &b.damped, &b.work, &b.bodyWork, &b.contact, &b.contactInput, &b.spring, &b.released, &b.initial, &b.projection})
     *v = r.get<Real>();
+  b.friction = version >= 4 ? r.get<Real>() : 0.0;
   BreakageParams& p = s.breakage.params;
   p.enabled = r.get<std::uint8_t>() != 0;
   p.threshold = r.get<Real>(), p.filterLength = r.get<Real>(), p.weibullModulus = r.get<Real>();
@@ -286,7 +289,7 @@ KinematicState loadState(const std::string& path, long expectNodes) {
                      (s.alive[e] ? s.stiffness[e] > 0 : s.stiffness[e] == 0 && s.damping[e] == 0);
     if (!okK) bad("stiffness/damping of element " + fmt(e), "finite values, > 0 stiffness for a live element, 0 for a broken one");
   }
-  for (Real v : {b.kinetic, b.elastic, b.damped, b.work, b.bodyWork, b.contact, b.contactInput, b.spring, b.released, b.initial, b.projection})
+  for (Real v : {b.kinetic, b.elastic, b.damped, b.work, b.bodyWork, b.contact, b.friction, b.contactInput, b.spring, b.released, b.initial, b.projection})
     if (!std::isfinite(v)) bad("energy book " + fmt(v), "finite energies [J]");
   if (b.kinetic < 0 || b.elastic < 0 || b.damped < 0 || b.contactInput < 0 || b.released < 0 || b.spring < 0)
     bad("a negative energy book", "kinetic, elastic, damped, contact input, spring and released energies >= 0 J");

@@ -2,13 +2,13 @@
 // broken elements, breakage state (strengths, strain filter, break log) and energy books, so that a
 // run continued from a file matches the run that wrote it, breakage included.
 //
-// Format "WOVENST3" (little-endian as in memory), version 3:
+// Format "WOVENST3" (little-endian as in memory), version 4 (version 3 is read too: its friction book is 0):
 //   magic[8] u32 version u32 0 u64 topology-fingerprint i64 nodes i64 elements i64 yarns
 //   i64 step f64 time f64 last_dt
 //   nodes x (3 f64 position) nodes x (3 f64 velocity) nodes x f64 section eps nodes x (3 f64 section dir)
 //   elements x u8 alive, elements x f64 stiffness, elements x f64 damping
 //   u8 books_started u8 spring_seen 11 x f64 books (kinetic elastic damped work body_work contact
-//       contact_input spring released initial projection)
+//       contact_input spring released initial projection), f64 friction (version 4 only)
 //   u8 breakage_enabled f64 threshold f64 filter_length f64 weibull_m u64 seed
 //   i64 n_strength, n_strength x f64; i64 n_filtered, n_filtered x f64
 //   i64 n_breaks, n_breaks x (i64 step f64 time i32 yarn i32 element 3 f64 position f64 strain

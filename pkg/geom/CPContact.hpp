@@ -28,6 +28,12 @@ SectionLine sectionSurfaceAlong(const Fabric& f, Index e, const Vec3& p, const V
 /// depth on the sections (contact model `paper`), or the gap model's crossing / side-by-side forms.
 enum class ContactKind : std::uint8_t { Paper = 0, Cross = 1, Side = 2 };
 
+/// A side-by-side point (geom/GapFunction.hpp): an end of A's axis with the closest point of B to it
+/// (A), an end of B's axis with the closest point of A to it (B), or the axes' closest approach
+/// (Closest). Each is a vertex-segment or segment-segment distance: the point slides with the pieces
+/// and the gap does not change by the sliding itself.
+enum class SideAnchor : std::uint8_t { A = 0, B = 1, Closest = 2 };
+
 struct CPContact {
   Index cpA = -1, cpB = -1;      ///< CPs, cpA < cpB
   Vec3 normal = Vec3::UnitZ();   ///< unit, from A towards B
@@ -46,8 +52,12 @@ struct CPContact {
   /// Gap model: the largest hA + hB the pair's sections may claim (GapFunction.hpp, "measure
   /// memory"); +inf for a pair measured for the first time [m].
   Real hCap = std::numeric_limits<Real>::infinity();
+  /// Gap model: how far the cap holds the sections' own measure down (their hA + hB less the
+  /// capped one, >= 0) [m]. The sections must flatten this much before the capped measure gives.
+  Real hHeld = 0;
   Vec3 hDir = Vec3::UnitZ();     ///< gap model: the direction they are measured (and flattened) along (GapFunction.hpp)
-  bool closest = false;          ///< gap model, side by side: the point is the axes' closest approach (it moves along)
+  /// Gap model, side by side: which material point the contact holds as the pieces slide (remeasure).
+  SideAnchor anchor = SideAnchor::A;
 };
 
 /// Static contact of CPs a < b: true (and `out`) when their boxes overlap. The boxes give the normal

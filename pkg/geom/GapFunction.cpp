@@ -1,4 +1,5 @@
 #include "geom/GapFunction.hpp"
+#include "shape/Cylinder.hpp"
 #include "bound/CPBound.hpp"
 #include "geom/SegmentDistance.hpp"
 #include <algorithm>
@@ -133,7 +134,8 @@ void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kin
     c.hA = lambda * qa.b + (1 - lambda) * support(qa, c.hDir);
     c.hB = lambda * qb.b + (1 - lambda) * support(qb, c.hDir);
     const Real H = c.hA + c.hB;
-    if (H > c.hCap) c.hA *= c.hCap / H, c.hB *= c.hCap / H;  // the measure memory (capMeasure)
+    c.hHeld = H > c.hCap ? H - c.hCap : 0.0;  // the measure memory (capMeasure)
+    if (H > c.hCap) c.hA *= c.hCap / H, c.hB *= c.hCap / H;
   }
   c.cpA = a, c.cpB = b, c.kind = kind;
   c.sA = s, c.sB = t;
@@ -181,33 +183,51 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
     if (hi >= lo) {
       // Two points at the ends of the shared part carry a line contact's force and moment; a short
       // shared part (the pieces meet end to end) is one point.
-      const int n = hi - lo > 1e-3 ? 2 : 1;
-      const Real at[2] = {n == 2 ? lo : 0.5 * (lo + hi), hi};
-      for (int k = 0; k < n; ++k) {
-        const Real s = at[k];
-        fillPair(f, a, b, s, alongCP(f, b, (1 - s) * f.pos[i] + s * f.pos[i + 1]), ContactKind::Side, rule,
-                 orient ? orient + k : nullptr, true, tangent, out[k]);
+      if (hi - lo <= 1e-3) {
+        const Real s = 0.5 * (lo + hi);
+        fillPair(f, a, b, s, alongCP(f, b, (1 - s) * f.pos[i] + s * f.pos[i + 1]), ContactKind::Side, rule, orient,
+                 true, tangent, out[0]);
+        out[0].anchor = SideAnchor::A;
+        return 1;
       }
-      if (n == 2) {
-        // Skew pieces whose axes come closest inside the shared part (an X at a small angle): the
-        // ends do not see that approach, so the closest point (moving with the axes) takes the
-        // place of the farther end. B - A is linear in s between the ends (t(s) inside B), so |B - A|
-        // has its minimum inside when it falls at the first end and rises at the second; only then
-        // are the closest points sought (most side-by-side pairs lie alongside: no extra work).
-        const Vec3 v0 = out[0].normal * (out[0].gap + out[0].hA + out[0].hB);  // B - A at the ends
-        const Vec3 v1 = out[1].normal * (out[1].gap + out[1].hA + out[1].hB);
-        const Vec3 dv = v1 - v0;
-        if (v0.dot(dv) < 0 && v1.dot(dv) > 0) {
-          const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
-          const Real r0 = v0.norm(), r1 = v1.norm();
-          if (sc.s > lo && sc.s < hi && sc.distance < std::min(r0, r1) - kSideSkew) {
-            const int q = r0 <= r1 ? 1 : 0;
-            fillPair(f, a, b, sc.s, sc.t, ContactKind::Side, rule, orient ? orient + q : nullptr, true, tangent, out[q]);
-            out[q].closest = true;
-          }
+      // Each end of the shared part is held by the segment end that makes it: an end of A (where B
+      // reaches past it) with B's closest point to it, or an end of B with A's closest point to it.
+      // Both are vertex-segment distances of material ends, so the gap changes as the pieces move,
+      // not as the shared part slides along them: skew pieces slide it along A (at 20 degrees a
+      // broken piece's end moved 35 um along its neighbour a step), and a point held at its place
+      // on A, with B's closest point to it, saw the axes 10-15 um closer each step than where the
+      // last step's row and projection had held them apart.
+      const Real ends[2] = {lo, hi};
+      for (int k = 0; k < 2; ++k) {
+        const Real s = ends[k];
+        if (s > 0 && s < 1) {  // made by B's end: B(0) at s0, B(1) at s1
+          fillPair(f, a, b, s, (k == 0) == (s0 <= s1) ? 0.0 : 1.0, ContactKind::Side, rule, orient ? orient + k : nullptr,
+                   true, tangent, out[k]);
+          out[k].anchor = SideAnchor::B;
+        } else {
+          fillPair(f, a, b, s, alongCP(f, b, f.pos[i + k]), ContactKind::Side, rule, orient ? orient + k : nullptr, true,
+                   tangent, out[k]);
+          out[k].anchor = SideAnchor::A;
         }
       }
-      return n;
+      // Skew pieces whose axes come closest inside the shared part (an X at a small angle): the
+      // ends do not see that approach, so the closest point (moving with the axes) takes the place
+      // of the farther end. Between the ends B - A turns by the crossing: |B - A| has its minimum
+      // inside when it falls at the first end and rises at the second; only then are the closest
+      // points sought (most side-by-side pairs lie alongside: no extra work).
+      const Vec3 v0 = out[0].normal * (out[0].gap + out[0].hA + out[0].hB);  // B - A at the ends
+      const Vec3 v1 = out[1].normal * (out[1].gap + out[1].hA + out[1].hB);
+      const Vec3 dv = v1 - v0;
+      if (v0.dot(dv) < 0 && v1.dot(dv) > 0) {
+        const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
+        const Real r0 = v0.norm(), r1 = v1.norm();
+        if (sc.s > lo && sc.s < hi && sc.distance < std::min(r0, r1) - kSideSkew) {
+          const int q = r0 <= r1 ? 1 : 0;
+          fillPair(f, a, b, sc.s, sc.t, ContactKind::Side, rule, orient ? orient + q : nullptr, true, tangent, out[q]);
+          out[q].anchor = SideAnchor::Closest;
+        }
+      }
+      return 2;
     }
   }
   // Crossing pieces: the closest points of the axes. Parallel ones that do not lie alongside (end
@@ -220,9 +240,11 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
 
 void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections, const Vec3Array* tangent) {
   const Index i = f.elem0[c.cpA], j = f.elem0[c.cpB];
-  Real s = c.sA, t;
-  if (c.kind == ContactKind::Side && !c.closest) {
+  Real s = c.sA, t = c.sB;
+  if (c.kind == ContactKind::Side && c.anchor == SideAnchor::A) {
     t = alongCP(f, c.cpB, (1 - s) * f.pos[i] + s * f.pos[i + 1]);
+  } else if (c.kind == ContactKind::Side && c.anchor == SideAnchor::B) {
+    s = alongCP(f, c.cpA, (1 - t) * f.pos[j] + t * f.pos[j + 1]);
   } else {
     const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
     s = sc.s, t = sc.t;
@@ -235,6 +257,7 @@ void capMeasure(CPContact& c, Real remembered) {
   const Real r = c.gap + c.hA + c.hB;  // the axes' signed distance
   c.hCap = std::max(remembered, r);
   const Real H = c.hA + c.hB;
+  c.hHeld = H > c.hCap ? H - c.hCap : 0.0;
   if (!(H > c.hCap)) return;
   const Vec3 pA = c.point - (c.hA + 0.5 * c.gap) * c.normal;  // A's axis point
   c.hA *= c.hCap / H, c.hB *= c.hCap / H;
@@ -329,6 +352,51 @@ void nodeFrame(const Fabric& f, Index k, const Vec3& t, SectionRule rule, Vec3& 
   ax = semiAxes(f.secRadius[k], f.secFlat[k], rule);
 }
 
+// Cylinder form (the box form's separating plane, shape/Cylinder.hpp): g_k = min over the part of
+// y.n_k - (x_k.n_k + support_k(n_k)), n_k held in the part frame for the step. Each end section k
+// takes the candidate direction (cylinderDirections of either end node) that leaves it the most
+// room, its support capped by the measure memory as on a box face: for a circular section that is
+// its distance to the cylinder minus its radius, exactly (the round surface has no face to share).
+Real cylinderGapAt(const Fabric& f, Index cp, const RigidBody& body, int part, const Vec3& n, const Vec3& local,
+                   const BodyContact& h, int node) {
+  const Real partMin = body.partCentre(part).dot(n) + cylinderMinAlong(body.parts[part], local);
+  return partMin - (f.pos[f.elem0[cp] + node].dot(n) + h.support[node]);
+}
+
+template <class Listed>
+int cylinderGap(const Fabric& f, Index cp, const RigidBody& body, int part, SectionRule rule, BodyContact c,
+                BodyContact out[2], const Vec3Array* tangent, const BodyContact* held, const Listed& listed) {
+  const Index i = f.elem0[cp];
+  const Mat3 A = body.partAxes(part);
+  const Vec3 centre = body.partCentre(part);
+  Vec3 dirs[12];
+  int nd = 0;
+  for (int k = 0; k < 2; ++k) nd += cylinderDirections(body.parts[part], A.transpose() * (f.pos[i + k] - centre), dirs + nd);
+  int count = 0;
+  for (int k = 0; k < 2; ++k) {
+    Vec3 u, d;
+    SemiAxes ax;
+    nodeFrame(f, i + k, yarnTangent(f, cp, k, tangent), rule, u, d, ax);
+    const bool heldHere = held && held->s == k;
+    Real best = -INFINITY;
+    for (int j = 0; j < nd; ++j) {
+      const Vec3 local = dirs[j], n = A * local;
+      const bool sameFace = heldHere && held->localNormal.dot(local) > 0.999;
+      const Real partMin = centre.dot(n) + cylinderMinAlong(body.parts[part], local);
+      const Real room = partMin - f.pos[i + k].dot(n);
+      const Real support = std::min(ellipseSupport(u, d, ax.a, ax.b, n), std::max(sameFace ? held->support[k] : ax.b, room));
+      const Real g = room - support;
+      if (g > best) best = g, c.normal = n, c.localNormal = local, c.support[k] = support;
+    }
+    c.s = k;
+    c.support[1 - k] = 0;
+    c.gap = best;
+    c.point = f.pos[i + k] + c.support[k] * c.normal;
+    if (listed(c)) out[count++] = c;
+  }
+  return count;
+}
+
 }  // namespace
 
 int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
@@ -360,6 +428,8 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
     out[0] = c;
     return 1;
   }
+  if (body.parts[part].type == RigidPart::Type::Cylinder)
+    return cylinderGap(f, cp, body, part, rule, c, out, tangent, held, listed);
   // The face of the box that leaves the CP the most room (the separating-axis choice among the
   // box's faces), then one contact per end section: a level CP under a face is held at both ends.
   const OBB box = body.partBox(part);
@@ -402,6 +472,13 @@ void remeasureBody(const Fabric& f, const RigidBody& body, BodyContact& c) {
     Vec3 P;
     c.gap = sphereGapAt(f.pos[i], f.pos[i + 1], body.partCentre(c.part), body.parts[c.part].radius, c, c.s, c.normal, P);
     c.point = P;
+    return;
+  }
+  if (body.parts[c.part].type == RigidPart::Type::Cylinder) {
+    c.normal = body.partAxes(c.part) * c.localNormal;
+    const int node = c.s > 0.5 ? 1 : 0;
+    c.gap = cylinderGapAt(f, c.cp, body, c.part, c.normal, c.localNormal, c, node);
+    c.point = f.pos[i + node] + c.support[node] * c.normal;
     return;
   }
   const OBB box = body.partBox(c.part);

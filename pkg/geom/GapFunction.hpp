@@ -14,15 +14,18 @@
 //          a fold lies face to face), its support along the normal (made normal to the yarn) below
 //          20 degrees, blended between (docs/collisions.md says why). By the envelope theorem
 //          dg/dx_k = w_k n with w = -(1-s*), -s*, 1-t*, t*.
-//   Side   side-by-side (near-parallel) CPs, two points: s fixed at the ends of the part of A that
-//          lies alongside B (a material point of A), t* the closest point of B's axis to A(s);
-//          the same g and gradient with that s: a line contact as a two-point manifold. Skew
-//          pieces whose axes come closest inside the shared part (an X at a small angle): that
+//   Side   side-by-side (near-parallel) CPs, two points at the ends of the part of A that lies
+//          alongside B, each held by the segment end that makes it (SideAnchor): an end of A with
+//          B's closest point to it, or an end of B with A's closest point to it. The same g and,
+//          by the envelope theorem, the same gradient form: a line contact as a two-point manifold
+//          of vertex-segment distances, which the pieces' sliding along each other leaves unchanged.
+//          Skew pieces whose axes come closest inside the shared part (an X at a small angle): that
 //          closest point (s*, t*), which moves along with them, replaces the farther end.
 // Measure memory (capMeasure): the sections' measure h_A + h_B is a state (their turn, flattening
 // and the crossing angle), not moved by forces; between steps it may grow only into room the axes
-// leave, never into an overlap (a pair new to the broad phase claims its half-thicknesses at most),
-// and a body contact's sections likewise. Without it, kinked chains after breaks turned sections'
+// leave, never into an overlap (a pair new to the broad phase, or a point far from the last step's,
+// claims its half-thicknesses at most), and a body contact's sections likewise. What the cap holds
+// back (CPContact::hHeld) must flatten first, and held sections are not counted on to flatten. Without it, kinked chains after breaks turned sections'
 // widths onto their neighbours by 200 um a step and the projection pushed on phantom overlaps.
 //   Sphere a CP and a sphere part of centre c, radius R: g = |c - P| - R, P the closest point to c
 //          of the CP's elliptic section at s* (c's place along the axis); n = (c - P)/|c - P| is the
@@ -35,6 +38,12 @@
 //          (of 6) that leaves the CP the most room (the separating-axis choice among the box's
 //          faces; it turns with the box), the supports held. dg_k/dx_k = -n, dg_k/dbody = n at the
 //          arm x_k + support_k n - x_G (translation and rotation).
+//   Cylinder a CP and a cylinder part (the RCC; the FSP's chisel-nosed one: shape/Cylinder.hpp): the
+//          box's separating-plane form, one contact per end section k, each with its own n_k (held in
+//          the part frame): of the candidate directions (the faces' normals, the round surface's at
+//          the node, the direction to the round cylinder's closest point) the one that leaves the
+//          section the most room; g_k = min over the part of y.n_k (exact) - (x_k.n_k + support_k);
+//          the same rows as the box.
 // A pair of CPs is Cross or Side by the angle between the axes with hysteresis (enter Side below
 // kSideEnterDeg, leave above kSideLeaveDeg), never by the instantaneous normal. Orientation: a pair
 // remembers its normal, and where the axes have passed through each other (the vector between the
@@ -84,7 +93,8 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
 void capMeasure(CPContact& c, Real remembered);
 
 /// Measures contact c again at the current positions: closest points (Cross, and a Side pair's
-/// closest-approach point) or closest point of B to the fixed A(sA) (Side), normal kept on c's side, and the gap with c's section supports
+/// closest-approach point), B's closest point to the fixed A(sA) or A's closest point to the fixed
+/// B(sB) (a Side end, by its anchor), normal kept on c's side, and the gap with c's section supports
 /// hA, hB (held) or, with `sections`, supports measured again (after flattening). This is g(x).
 void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections, const Vec3Array* tangent = nullptr);
 

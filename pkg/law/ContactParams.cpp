@@ -34,7 +34,10 @@ Flattening flatteningByName(const std::string& name) {
 
 void ContactParams::validate() const {
   require(std::isfinite(restitution) && restitution >= 0 && restitution <= 1, "restitution", restitution, "[0, 1]");
-  require(std::isfinite(friction) && friction >= 0, "friction", friction, "[0, inf) (Coulomb coefficient)");
+  require(std::isfinite(friction) && friction >= 0 && friction <= 2, "friction", friction,
+          "[0, 2] (Coulomb coefficient between yarns)");
+  require(std::isfinite(bodyFriction) && bodyFriction >= 0 && bodyFriction <= 2, "body_friction", bodyFriction,
+          "[0, 2] (Coulomb coefficient between a rigid body and the yarns)");
   require(std::isfinite(mcd) && mcd > 0 && mcd < 1, "mcd", mcd, "(0, 1) (maximum cross-sectional deformation)");
   require(std::isfinite(margin) && margin >= 0, "margin", margin, "[0, inf) m");
   require(std::isfinite(skin) && skin >= 0, "skin", skin, "[0, inf) m");
@@ -54,6 +57,10 @@ void ContactParams::validate() const {
   require(static_cast<int>(response) <= 1, "response", static_cast<int>(response), "'impulse' or 'penalty'");
   require(static_cast<int>(flattening) <= 2, "flattening", static_cast<int>(flattening), "'geometric', 'none' or 'springs'");
   require(static_cast<int>(model) <= 1, "contact_model", static_cast<int>(model), "'gap' or 'paper'");
+  require(!(response == Response::Penalty && friction > 0), "friction", friction,
+          "0 with response 'penalty' (Coulomb friction acts in the impulse rows only); [0, 2] with response 'impulse'");
+  require(!(response == Response::Penalty && bodyFriction > 0), "body_friction", bodyFriction,
+          "0 with response 'penalty' (Coulomb friction acts in the impulse rows only); [0, 2] with response 'impulse'");
   require(projectionSweeps >= -1 && projectionSweeps <= 50, "projection_sweeps", projectionSweeps, "[0, 50], or -1 (auto)");
   require(!(projectionSweeps > 0 && (model != ContactModel::Gap || response != Response::Impulse)), "projection_sweeps",
           projectionSweeps, "0 or -1 (auto) with contact_model 'paper' or response 'penalty'; [1, 50] only with "

@@ -64,7 +64,10 @@ struct ContactParams {
     return model == ContactModel::Gap && response == Response::Impulse ? 8 : 0;
   }
   Real restitution = 0.0;     ///< e of Eq. 5 in [0, 1]; 0: "at the next time moment both nodes move together"
-  Real friction = 0.0;        ///< Coulomb coefficient mu >= 0 (0 as in the paper)
+  Real friction = 0.0;        ///< Coulomb coefficient mu in [0, 2] between yarns (0 as in the paper)
+  /// Coulomb coefficient in [0, 2] between a rigid body and the yarns (the impulse rows whose B side
+  /// is a body): a steel projectile on aramid is not a yarn on a yarn.
+  Real bodyFriction = 0.0;
   Real mcd = 0.6;             ///< maximum cross-sectional deformation in (0, 1) (paper: 0.5-0.7)
   SectionRule rule = SectionRule::ConstantArea;
   Real margin = 1e-6;         ///< added to every side of a CP's OBB [m] >= 0: contacts start this close

@@ -143,7 +143,17 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   dt_ = dt;
   keepVelocities(f);
 
-  rep.iterations = solve(f, p, p.friction > 0);
+  const bool friction = p.friction > 0 || p.bodyFriction > 0;
+  if (friction)
+    parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
+      Row& r = rows_[k];
+      r.kick.setZero();
+      for (int q = 0; q < 4; ++q) r.kick += (0.5 * dt * r.w[q] * f.invMass[r.node[q]]) * f.force[r.node[q]];
+      r.frictionTaken = 0;
+    });
+  rep.iterations = solve(f, p, friction);
+  if (friction)
+    for (const Row& r : rows_) rep.frictionWork += r.frictionTaken;
   parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
     const Row& r = rows_[k];
     const Real vn = rowVelocity(f, r).dot(r.n);
@@ -207,15 +217,20 @@ Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool fricti
   const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
   Vec3 J = (lambda - r.lambda) * r.n;
   r.lambda = lambda;
-  if (friction) {  // Coulomb: cancel the tangential slip, within the cone mu * lambda
+  const Real mu = r.body >= 0 ? p.bodyFriction : p.friction;
+  Vec3 Jt = Vec3::Zero();
+  if (friction && mu > 0) {  // Coulomb: cancel the tangential slip, within the cone mu * lambda
     const Vec3 vt = vr - vn * r.n;
     Vec3 lt = r.lambdaT - vt * r.invK;
-    const Real lim = p.friction * r.lambda, len = lt.norm();
+    const Real lim = mu * r.lambda, len = lt.norm();
     if (len > lim) lt *= lim / len;
-    J += lt - r.lambdaT;
+    Jt = lt - r.lambdaT;
+    J += Jt;
     r.lambdaT = lt;
   }
   applyRow(f, r, J);
+  if (friction && mu > 0)  // the tangential part's share of this update's energy (see the header)
+    r.frictionTaken -= Jt.dot(0.5 * (vr + rowVelocity(f, r)) - r.kick);
   return miss;
 }
 

@@ -19,11 +19,22 @@
 // velocity and angular velocity change with its mass and inertia (J n on the body, -J n on the CP:
 // momentum is exchanged exactly). Its room is the gap alone: a body does not flatten the sections.
 // Simultaneous rows are solved by projected Gauss-Seidel on accumulated impulses (J >= 0, and the
-// Coulomb friction impulse within mu J) until no row misses its target by more than the tolerance
-// or maxIterations is reached; the residual and unresolved rows are reported, never hidden. The
-// sweeps are coloured (law/RowColouring): rows that share no node are solved at once on the
-// threads, colour after colour, the rows on a rigid body last in row order; the colouring follows
-// the row list alone, so every thread count gives the same bits.
+// Coulomb friction impulse within mu J; mu = ContactParams::friction between yarns, bodyFriction on
+// body rows) until no row misses its target by more than the tolerance or maxIterations is reached;
+// the residual and unresolved rows are reported, never hidden. The sweeps are coloured
+// (law/RowColouring): rows that share no node are solved at once on the threads, colour after
+// colour, the rows on a rigid body last in row order; the colouring follows the row list alone, so
+// every thread count gives the same bits.
+//
+// Friction's share of the energy (EnergyBooks::friction). One update of a row applies J; with u the
+// row's relative velocity before and u' after it, the half-step kinetic energy changes by exactly
+// J . (u + u')/2 (sum over the nodes of m dv . (v + v')/2, dv = w J / m), and the integer-step
+// energy the books keep (energyChange) by J . ((u + u')/2 - k), k = (dt/2) sum w a the row's
+// half kick. Split J = J_n n + J_t: the tangential part's share J_t . ((u + u')/2 - k), summed over
+// every update of every sweep, is the friction work, and the normal parts' share is the rest, so the
+// two add up to the measured change exactly. (The final tangential impulse times a mean slip would
+// not: the sweeps clamp and re-aim J_t as J_n changes, so no single slip velocity belongs to it.)
+// Each row sums its own share over the sweeps; the rows' sums are added in row order.
 #pragma once
 #include "fabric/Fabric.hpp"
 #include "geom/BodyContact.hpp"
@@ -44,6 +55,9 @@ struct ImpulseReport {
   /// Work the rigid bodies did on the fabric [J]: minus their kinetic energy change (dynamic
   /// bodies), the impulse on the fabric times the body's velocity at the point (kinematic ones).
   Real bodyWork = 0;
+  /// Of the energy the impulses took (-energyChange + bodyWork), what their tangential parts took [J]
+  /// (see above; 0 without friction).
+  Real frictionWork = 0;
 };
 
 class ImpulseLaw {
@@ -82,6 +96,8 @@ class ImpulseLaw {
     Real vn0;           // normal velocity before the impulses [m/s]
     Real lambda = 0;    // accumulated normal impulse [N s]
     Vec3 lambdaT = Vec3::Zero();
+    Vec3 kick = Vec3::Zero();  // (dt/2) sum w_k a_k of the fabric nodes (friction's energy share) [m/s]
+    Real frictionTaken = 0;    // the tangential parts' energy share over this resolve's sweeps, taken out [J]
     int body = -1;      // B side: a rigid body (weights w[2], w[3] are 0), at arm r from its centre
     Vec3 arm = Vec3::Zero();
   };

@@ -1,5 +1,6 @@
 #include "shape/RigidBody.hpp"
 #include "core/Errors.hpp"
+#include "shape/Cylinder.hpp"
 #include <cmath>
 
 namespace woven {
@@ -7,7 +8,7 @@ namespace woven {
 // Physical ranges, not only finiteness: a velocity of 1e300 m/s or an infinite inertia passed a
 // finiteness or sign check and turned into NaN at the first impulse (README, Parameters).
 void RigidBody::validate() const {
-  require(!parts.empty(), "parts", 0, "at least one Box or Sphere part");
+  require(!parts.empty(), "parts", 0, "at least one Box, Sphere or Cylinder part");
   const auto unit = [](const Quat& q) { return q.coeffs().allFinite() && std::abs(q.norm() - 1) < 1e-6; };
   for (const RigidPart& p : parts) {
     if (p.type == RigidPart::Type::Box)
@@ -15,6 +16,7 @@ void RigidBody::validate() const {
               p.halfSize.allFinite() ? p.halfSize.minCoeff() : NAN, "[1e-9, 10] m on every axis");
     else
       require(std::isfinite(p.radius) && p.radius >= 1e-9 && p.radius <= 10, "radius", p.radius, "[1e-9, 10] m");
+    if (p.type == RigidPart::Type::Cylinder) validateCylinder(p);
     require(p.offset.allFinite() && p.offset.norm() <= 10, "offset", p.offset.norm(), "finite, |offset| <= 10 m");
     require(unit(p.ori), "part orientation", p.ori.norm(), "a finite unit quaternion (|q| = 1 within 1e-6)");
   }

@@ -17,10 +17,15 @@ namespace woven {
 using Quat = Eigen::Quaternion<Real>;
 
 struct RigidPart {
-  enum class Type : std::uint8_t { Box = 0, Sphere = 1 };
+  // Cylinder: YADE has no such body; a standard projectile (RCC, FSP) is a YADE body whose mass and
+  // inertia are those of this exact solid, shown in YADE by a stand-in shape (shape/Cylinder.hpp).
+  enum class Type : std::uint8_t { Box = 0, Sphere = 1, Cylinder = 2 };
   Type type = Type::Box;
   Vec3 halfSize = Vec3::Zero();  ///< box half-extents in the part frame [m] (YADE Box.extents)
-  Real radius = 0;               ///< sphere radius [m]
+  Real radius = 0;               ///< sphere or cylinder radius [m]
+  Real halfLength = 0;           ///< cylinder: half its length along the part's z axis [m]
+  Real chiselAngle = 0;          ///< cylinder: angle of the chisel nose's two flats to the axis [rad]; 0: none
+  Real landHalfWidth = 0;        ///< cylinder with a chisel: half-width of the flat tip the flats leave [m]
   Vec3 offset = Vec3::Zero();    ///< part centre in the body frame [m]
   Quat ori = Quat::Identity();   ///< part frame in the body frame
 };
@@ -55,7 +60,10 @@ struct RigidBody {
     OBB b;
     b.centre = partCentre(k);
     b.axes = partAxes(k);
-    b.extent = parts[k].type == RigidPart::Type::Box ? parts[k].halfSize : Vec3::Constant(parts[k].radius);
+    const RigidPart& p = parts[k];
+    b.extent = p.type == RigidPart::Type::Box       ? p.halfSize
+               : p.type == RigidPart::Type::Sphere ? Vec3::Constant(p.radius)
+                                                   : Vec3(p.radius, p.radius, p.halfLength);
     return b;
   }
   /// Kinetic energy 1/2 m v^2 + 1/2 w . I w [J] (0 for a kinematic body).

@@ -4,12 +4,14 @@ clamped ply with breakage, and a projectile as an ordinary YADE body coupled to 
     ply = woven.ballistic.build_ply(weave_args, contact_args, side=0.0508, clamp=4)
     proj = woven.ballistic.add_projectile(ply, shape='box', mass=1.1e-3, size=5.59e-3, V=200, standoff=5e-5)
 """
+import math
+
 import numpy as np
 import yade.wrapper
 from yade import utils
-from yade._minieigenHP import Vector3
+from yade._minieigenHP import Quaternion, Vector3
 
-from . import arrays, coupling
+from . import arrays, coupling, pack
 from ._woven import MAX_WEAVE_NODES
 from .weave import weave, pattern
 
@@ -17,24 +19,32 @@ _O = yade.wrapper.Omega()
 
 
 class Ply:
-    """A built ply: weave (woven.weave.Weave), engine, and its geometry at the start (SI)."""
+    """A built ply or pack: weave (woven.weave.Weave), engine, pack (woven.pack.Pack, or None for a
+    single ply), and its geometry at the start (SI)."""
 
-    def __init__(self, w, settle_left):
-        self.weave, self.engine, self.settle_left = w, w.engine, settle_left
+    def __init__(self, w, settle_left, pk=None):
+        self.weave, self.engine, self.settle_left, self.pack = w, w.engine, settle_left, pk
         X0 = arrays.positions(w.engine).copy()
         self.X0 = X0
-        self.centre = X0.mean(axis=0)
-        self.z_mid = float(np.median(X0[:, 2]))  # [m] the ply's mid-plane
+        first = X0 if pk is None else X0[pk.nodes[0][0]:pk.nodes[0][1]]
+        last = X0 if pk is None else X0[pk.nodes[-1][0]:pk.nodes[-1][1]]
+        self.centre = first.mean(axis=0)
+        self.z_mid = float(np.median(first[:, 2]))  # [m] the (top) ply's mid-plane
+        self.z_exit = float(np.median(last[:, 2]))  # [m] the last ply's mid-plane: below it, through the pack
         ab = arrays.section_semi_axes(w.engine)
         self.z_top = float(np.max(X0[:, 2] + ab[:, 0]))  # [m] above every section, whatever its turn
         self.thickness = max(w.engine.yarn(y)['thickness'] for y in (w.warp_yarns[0], w.weft_yarns[0]))
 
 
-def build_ply(weave_args, contact_args, side=0.0508, clamp=4, state='', breakage=None):
+def build_ply(weave_args, contact_args, side=0.0508, clamp=4, state='', breakage=None, plies=1, ply_gap=None,
+              ply_angles='0'):
     """Builds the ply: weave_args as woven.weave's keys (nx or ny <= 0: from `side` [m], rounded to whole
     pattern repeats), collisions on with contact_args (woven.contact keys), sections settled, `state`
     loaded when given, yarn ends held on `clamp` = 4 (all), 2 (warp) or 0 edges, and breakage
-    (dict of FabricEngine.enable_breakage's keys; None: off). Returns a Ply."""
+    (dict of FabricEngine.enable_breakage's keys; None: off). With plies > 1 (or a ply angle other
+    than 0) a pack (woven.pack.stack): `plies` copies, each turned by its angle of `ply_angles`
+    [deg] ('0,45' or a list; one applies to all), `ply_gap` [m] apart (None: one yarn thickness),
+    every ply clamped alike. Returns a Ply."""
     from . import contact
     args = dict(weave_args)
     if args.get('nx', 0) <= 0 or args.get('ny', 0) <= 0:
@@ -60,6 +70,19 @@ def build_ply(weave_args, contact_args, side=0.0508, clamp=4, state='', breakage
     e = w.engine
     contact.enable(e, **contact_args)
     left = e.settle_sections()
+    pk = None
+    if plies > 1 or any(a != 0 for a in pack.parse_angles(ply_angles, plies)):
+        # The settled ply's thickness (its sections' reach along z) plus the gap is the pitch; the
+        # pack is built from the same node positions and settles like the single ply.
+        gap = thickness_of(w) if ply_gap is None else ply_gap
+        reach = pack.vertical_reach(e)
+        X = arrays.positions(e)
+        pitch = float(np.max(X[:, 2] + reach) - np.min(X[:, 2] - reach)) + gap
+        pk = pack.stack(w, plies, pitch, ply_angles)
+        w = pk.weave
+        e = w.engine
+        contact.enable(e, **contact_args)
+        left = e.settle_sections()
     held = w.warp_yarns + w.weft_yarns if clamp == 4 else (w.warp_yarns if clamp == 2 else [])
     for y in held:
         info = e.yarn(y)
@@ -71,7 +94,12 @@ def build_ply(weave_args, contact_args, side=0.0508, clamp=4, state='', breakage
         # Last: a state saved with breakage brings its broken elements, strengths and filter back
         # (enabling breakage after it would restart them); one saved without keeps these settings.
         e.load_state(state)
-    return Ply(w, left)
+    return Ply(w, left, pk)
+
+
+def thickness_of(w):
+    """The yarn thickness of a weave [m] (the larger of warp and weft)."""
+    return max(w.engine.yarn(y)['thickness'] for y in (w.warp_yarns[0], w.weft_yarns[0]))
 
 
 def fine_radius_from_waves(weave_args, V, t_end, shape, size):
@@ -83,26 +111,102 @@ def fine_radius_from_waves(weave_args, V, t_end, shape, size):
     probe = weave(**dict(weave_args, nx=1, ny=1, fine_radius=-1))
     info = probe.engine.yarn(probe.warp_yarns[0])
     U = theory.smith(V, info['E'], info['rho'])['U_E']
-    return U * t_end + (size / 2 ** 0.5 if shape == 'box' else 0.5 * size)
+    return U * t_end + (size / 2 ** 0.5 if shape == 'box' else 0.5 * size)  # rcc, fsp: size = diameter
 
 
-def add_projectile(ply, shape='box', mass=1.1e-3, size=5.59e-3, V=200.0, standoff=5e-5):
-    """A projectile over the ply's centre, `standoff` [m] above its top, moving at V [m/s] along -z:
-    a cube of edge `size` [m], face on, or a sphere of diameter `size`, of `mass` [kg], appended to
-    O.bodies and coupled to the ply's engine. Returns the YADE body."""
-    half = 0.5 * size
-    start = (ply.centre[0], ply.centre[1], ply.z_top + half + standoff)
+SHAPES = ('box', 'sphere', 'rcc', 'fsp')
+YAW_RANGE = (-90.0, 90.0)  # [deg]
+OBLIQUITY_RANGE = (0.0, 80.0)  # [deg]
+
+
+def projectile_pose(shape, yaw=0.0, obliquity=0.0):
+    """(orientation, unit velocity direction) of a projectile: its flight turned from -z by
+    `obliquity` [deg] towards +x, its axis (a cube's face normal; a cylinder's, nose first) turned from
+    the flight by `yaw` [deg] in the same plane (the plane of incidence)."""
+    Ry = lambda deg: Quaternion(Vector3(0, 1, 0), -math.radians(deg))
+    o = math.radians(obliquity)
+    direction = Vector3(math.sin(o), 0, -math.cos(o))
+    ori = Ry(obliquity + yaw)
+    if shape in ('rcc', 'fsp'):  # the part's nose is +z: turned to face -z first
+        ori = ori * Quaternion(Vector3(1, 0, 0), math.pi)
+    return ori, direction
+
+
+def projectile_extent(shape, size, ori, solid=None):
+    """How far the projectile reaches below and above its centre of mass along z [m] at orientation
+    `ori`: a cube of edge `size`, a sphere of diameter `size`, or the cylinder `solid`
+    (woven.projectiles.solid)."""
+    if shape == 'sphere':
+        return 0.5 * size, 0.5 * size
     if shape == 'box':
-        body = utils.box(start, (half, half, half), fixed=False)
-        inertia = mass * size ** 2 / 6  # cube about its centre
+        R = ori.toRotationMatrix()
+        h = 0.5 * size * sum(abs(R[2, k]) for k in range(3))
+        return h, h
+    from ._woven import cylinder_min_along
+    dims = (solid['radius'], solid['half_length'], solid['chisel_angle'], solid['land_half_width'])
+    off = ori * Vector3(0, 0, -solid['centroid_z'])  # the part's centre from the centre of mass
+    out = []
+    for sign in (1, -1):
+        n = ori.conjugate() * Vector3(0, 0, sign)
+        out.append(-(sign * off[2] + cylinder_min_along(*dims, n=n)))
+    return out[0], out[1]
+
+
+def add_projectile(ply, shape='box', mass=1.1e-3, size=5.59e-3, V=200.0, standoff=5e-5, yaw=0.0, obliquity=0.0,
+                   solid=None):
+    """A projectile aimed at the ply's centre, its lowest point `standoff` [m] above the ply's top,
+    moving at V [m/s] along -z turned by `obliquity` [deg] towards +x, its axis `yaw` [deg] off its
+    flight in that plane (projectile_pose): a cube of edge `size` [m], a sphere of diameter `size`, of
+    `mass` [kg], or (shape 'rcc' or 'fsp') the exact cylinder `solid` (woven.projectiles.solid; its
+    mass and inertia scaled to `mass`), shown in YADE by a box stand-in around it. Appended to
+    O.bodies and coupled to the ply's engine (which refuses a projectile that starts inside the
+    ply). Returns the YADE body."""
+    if shape not in SHAPES:
+        raise ValueError('shape = %r is invalid: allowed %s' % (shape, ', '.join(SHAPES)))
+    if not YAW_RANGE[0] <= yaw <= YAW_RANGE[1]:
+        raise ValueError('yaw = %r is invalid: allowed [%g, %g] deg' % ((yaw,) + YAW_RANGE))
+    if not OBLIQUITY_RANGE[0] <= obliquity <= OBLIQUITY_RANGE[1]:
+        raise ValueError('obliquity = %r is invalid: allowed [%g, %g] deg' % ((obliquity,) + OBLIQUITY_RANGE))
+    half = 0.5 * size
+    if shape in ('box', 'sphere') and yaw == 0 and obliquity == 0:  # the scene as it always was, bit for bit
+        start = (ply.centre[0], ply.centre[1], ply.z_top + half + standoff)
+        if shape == 'box':
+            body = utils.box(start, (half, half, half), fixed=False)
+            inertia = mass * size ** 2 / 6  # cube about its centre
+        else:
+            body = utils.sphere(start, half, fixed=False)
+            inertia = 0.4 * mass * half ** 2
+        inertia, velocity, ori, parts = Vector3(inertia, inertia, inertia), Vector3(0, 0, -V), None, None
     else:
-        body = utils.sphere(start, half, fixed=False)
-        inertia = 0.4 * mass * half ** 2
+        ori, direction = projectile_pose(shape, yaw, obliquity)
+        low, _ = projectile_extent(shape, size, ori, solid)
+        # On the line of flight through the ply's centre at the height where the lowest point is
+        # `standoff` above the top.
+        lam = standoff / math.cos(math.radians(obliquity))
+        start = Vector3(ply.centre[0], ply.centre[1], ply.z_top + low) - lam * direction
+        if shape == 'box':
+            body = utils.box(start, (half, half, half), fixed=False)
+            inertia = Vector3.Ones * (mass * size ** 2 / 6)
+        elif shape == 'sphere':
+            body = utils.sphere(start, half, fixed=False)
+            inertia = Vector3.Ones * (0.4 * mass * half ** 2)
+        else:
+            scale = mass / solid['mass']
+            body = utils.box(start, (solid['radius'], solid['radius'], solid['half_length']), fixed=False)
+            inertia = Vector3(*solid['inertia']) * scale
+            from . import projectiles
+            parts = projectiles.parts(solid)
+        velocity = direction * V
+        if shape in ('box', 'sphere'):
+            parts = None
     body.mask = 0  # no YADE contacts with the mirrored yarn bodies
     pid = _O.bodies.append(body)
     b = _O.bodies[pid]
     b.state.mass = mass
-    b.state.inertia = Vector3(inertia, inertia, inertia)
-    b.state.vel = Vector3(0, 0, -V)
-    coupling.couple(ply.engine, [pid])  # refuses a projectile that starts inside the ply
+    b.state.inertia = inertia
+    if ori is not None:
+        b.state.ori = ori
+        b.aspherical = True  # YADE integrates its rotation through the angular momentum
+    b.state.vel = velocity
+    coupling.couple(ply.engine, [pid], parts={pid: parts} if parts else None)  # refuses a start inside the ply
     return b

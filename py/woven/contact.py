@@ -10,7 +10,8 @@ from . import _woven
 # key: (default, unit, description); the keys of FabricEngine.enable_collisions.
 CONTACT_KEYS = {
     'restitution': (0.0, '', 'coefficient of restitution e of Eq. 5, in [0, 1]'),
-    'friction': (0.0, '', 'Coulomb coefficient between yarns, >= 0 (0 as in the paper)'),
+    'friction': (0.0, '', 'Coulomb coefficient between yarns, in [0, 2] (0 as in the paper; 0 with response=penalty); its work is the energy book friction'),
+    'body_friction': (0.0, '', 'Coulomb coefficient between a rigid body (the projectile) and the yarns, in [0, 2] (0 with response=penalty); its work is the energy book friction'),
     'mcd': (0.6, '', 'maximum cross-sectional deformation eps = 1 - b/r0, in (0, 1)'),
     'section_rule': ('constant_area', '', "flattening: 'constant_area' (a*b = r0^2) or 'paper' (a = r0(1+eps))"),
     'margin': (1e-6, 'm', 'added to each side of a CP box: contacts start this close'),
@@ -39,6 +40,25 @@ CONTACT_KEYS = {
                     "threads, colour by colour; the default) or 'sequential' (contact order, serial); the same bits for any thread count in either"),
     'yarn_contacts': (True, '', 'contacts between yarns (False: only with rigid bodies; yarns pass through each other)'),
 }
+
+
+FRICTION_KEYS = ('friction', 'body_friction')
+
+
+def check_friction(keys):
+    """Refuses, before anything is built, a friction key of `keys` (a dict or a scene's params) outside
+    [0, 2] or above 0 with response=penalty (Coulomb friction acts in the impulse rows only): ValueError
+    naming the key and its range. Keys absent from `keys` take their defaults."""
+    response = keys['response'] if 'response' in keys else CONTACT_KEYS['response'][0]
+    for k in FRICTION_KEYS:
+        if k not in keys:
+            continue
+        v = _convert(k, keys[k])
+        if not (math.isfinite(v) and 0 <= v <= 2):
+            raise ValueError('%s = %r is invalid: allowed [0, 2] (%s)' % (k, keys[k], CONTACT_KEYS[k][2]))
+        if v > 0 and response == 'penalty':
+            raise ValueError("%s = %r is invalid: allowed 0 with response = 'penalty' (Coulomb friction acts in the "
+                             "impulse rows only); [0, 2] with response = 'impulse'" % (k, keys[k]))
 
 
 def penalty_dt_limit(m, k):

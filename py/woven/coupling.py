@@ -36,8 +36,11 @@ def _parts_of(body):
     raise ValueError('body %d has shape %s: woven collides yarns with Box, Sphere and clumps of these' % (body.id, kind))
 
 
-def couple(engine, ids):
+def couple(engine, ids, parts=None):
     """Makes the YADE bodies `ids` collide with the fabric of `engine` (collisions must be on).
+
+    `parts` (optional) maps a body id to its woven parts, for a body whose YADE shape is a stand-in
+    (YADE has no cylinder: woven.projectiles), else the parts come from the YADE shape.
 
     A body that YADE does not integrate (b.dynamic False) is kinematic for the fabric: impulses do
     not change its motion. Returns the woven body indices. Raises ValueError for an unknown id, a
@@ -70,7 +73,7 @@ def couple(engine, ids):
         mass = s.mass if b.dynamic else 0.0
         if b.dynamic and not (s.mass > 0 and math.isfinite(s.mass)):
             raise ValueError('mass = %r of body %d is invalid: allowed (0, inf) kg for a dynamic body' % (s.mass, i))
-        k = engine.add_body(i, _parts_of(b), mass, s.inertia, s.pos, s.ori, s.vel, s.angVel)
+        k = engine.add_body(i, parts[i] if parts and i in parts else _parts_of(b), mass, s.inertia, s.pos, s.ori, s.vel, s.angVel)
         overlap = engine.body_overlap(k)
         if overlap > 0:
             engine.pop_body()

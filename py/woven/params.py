@@ -77,6 +77,7 @@ def read_params(defaults, argv=None):
             raise ValueError('argument %r is invalid: allowed key=value with key one of %s' % (a, ', '.join(sorted(defaults))))
         k, v = a.split('=', 1)
         given[k.strip()] = v
+    p.given = set(given)  # the keys set by the table line or the command line (the rest are defaults)
     for k, v in given.items():
         if k not in defaults:
             raise ValueError('unknown parameter %r: allowed keys are %s' % (k, ', '.join(sorted(defaults))))

@@ -55,6 +55,42 @@ def smith(V, E, rho):
             'U_E': c * (math.sqrt(e * (1 + e)) - e)}
 
 
+def smith_fabric(V, E, rho, mass_ratio=2.0):
+    """Smith's impact for a yarn of a fabric whose transverse motion carries `mass_ratio` [1, 10]
+    times the yarn's own mass (the crossing yarns it pushes out of plane: for a balanced plain weave
+    the fabric's mass over the struck family's, about 2), while its longitudinal wave keeps the
+    yarn's c = sqrt(E/rho) (frictionless crossings do not drag the crossing yarns along it).
+
+    Smith's two conditions with the kink's material speed U = sqrt(T / (kappa m (1 + eps))) =
+    c sqrt(eps / (kappa (1 + eps))) (momentum across a kink of a string of kappa m per unstretched
+    length under T = E A eps) and the kinematics of the straight stretched segment behind it,
+    (U (1 + eps))^2 = (U (1 + eps) - c eps)^2 + V^2, i.e. V^2 = 2 c eps U (1 + eps) - c^2 eps^2:
+    solved for eps by bisection. mass_ratio = 1 is Smith's yarn (smith()). Returns the same dict as
+    smith(): c, strain, w = c eps, U_L = U, U_E = U (1 + eps) - c eps (lab frame) [m/s]."""
+    E, rho = _E(E), _rho(rho)
+    V = _finite('V', V, 1e-6, 1e5, 'm/s')
+    k = _finite('mass_ratio', mass_ratio, 1, 10, '')
+    c = math.sqrt(E / rho)
+
+    def kink(e):
+        return c * math.sqrt(e / (k * (1 + e)))
+
+    def speed(e):
+        return math.sqrt(max(2 * c * e * kink(e) * (1 + e) - (c * e) ** 2, 0.0))
+
+    lo, hi = 0.0, 1.0
+    if speed(hi) < V:
+        raise ValueError('smith_fabric: V = %g m/s exceeds the model range (strain > 100 %%)' % V)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if speed(mid) < V:
+            lo = mid
+        else:
+            hi = mid
+    e = 0.5 * (lo + hi)
+    return {'c': c, 'strain': e, 'w': c * e, 'U_L': kink(e), 'U_E': kink(e) * (1 + e) - c * e}
+
+
 def smith_critical_velocity(failure_strain, E, rho):
     """Impact speed [m/s] at which the strain behind the front reaches failure_strain."""
     e = _finite('failure_strain', failure_strain, 1e-12, 10, '')

@@ -80,7 +80,7 @@ def yarn_tubes(engine, rings=8):
 
 
 def body_surfaces(engine):
-    """vtkPolyData of the coupled rigid bodies' parts (boxes and spheres) at their current pose."""
+    """vtkPolyData of the coupled rigid bodies' parts (boxes, spheres, cylinders) at their current pose."""
     vtk, _ = _vtk()
     app = vtk.vtkAppendPolyData()
     count = 0
@@ -89,6 +89,11 @@ def body_surfaces(engine):
             if kind == 'box':
                 src = vtk.vtkCubeSource()
                 src.SetXLength(2 * size[0]), src.SetYLength(2 * size[1]), src.SetZLength(2 * size[2])
+            elif kind == 'cylinder':  # (radius, half_length, chisel_angle, land_half_width): the round
+                # cylinder (a chisel's flats are not cut in the picture); VTK's axis is y, the part's z
+                src = vtk.vtkCylinderSource()
+                src.SetRadius(size[0]), src.SetHeight(2 * size[1]), src.SetResolution(32)
+                axes = [[row[0], row[2], -row[1]] for row in axes]  # turn VTK's y onto the part's z
             else:
                 src = vtk.vtkSphereSource()
                 src.SetRadius(size), src.SetThetaResolution(24), src.SetPhiResolution(12)

@@ -6,6 +6,7 @@
 // Also: closest points on an ellipse against a dense sampling, and the side of the normal.
 #include "chain_util.hpp"
 #include "geom/GapFunction.hpp"
+#include "shape/Cylinder.hpp"
 #include <gtest/gtest.h>
 #include <cmath>
 #include <random>
@@ -237,6 +238,150 @@ TEST(GapFunction, BoxRowIsTheGradientOfTheGap) {
   EXPECT_EQ(tested, 2 * kConfigs);
 }
 
+namespace {
+// A cylinder part (half of them with the FSP's chisel nose, at random angle and land) offset from
+// the body's centre of mass and turned at random.
+RigidBody randomCylinder(std::mt19937_64& rng, const Vec3& partCentre) {
+  std::uniform_real_distribution<Real> u(0.5, 1.5), unit(0, 1);
+  RigidBody b;
+  RigidPart part;
+  part.type = RigidPart::Type::Cylinder;
+  part.radius = 1.5e-3 * u(rng);
+  part.halfLength = 1.5e-3 * u(rng);
+  if (unit(rng) < 0.5) {
+    part.landHalfWidth = part.radius * 0.9 * unit(rng);
+    // flats that end before the tail: (R - w) / tan(alpha) < 2H
+    const Real minAngle = std::atan((part.radius - part.landHalfWidth) / (2 * part.halfLength));
+    part.chiselAngle = minAngle + (0.5 * M_PI - minAngle) * (0.05 + 0.9 * unit(rng));
+  }
+  part.offset = 0.5e-3 * randomUnit(rng);
+  part.ori = Quat(Eigen::AngleAxis<Real>(u(rng), randomUnit(rng)));
+  b.parts.push_back(part);
+  b.mass = 1e-3, b.inertia = Vec3::Constant(1e-9);
+  b.ori = Quat(Eigen::AngleAxis<Real>(3 * u(rng), randomUnit(rng)));
+  b.pos = partCentre - b.ori * part.offset;
+  b.validate();
+  return b;
+}
+
+// Is y (part frame) inside the cylinder part, within tol [m]?
+bool insideCylinder(const RigidPart& p, const Vec3& y, Real tol) {
+  if (std::hypot(y.x(), y.y()) > p.radius + tol || std::abs(y.z()) > p.halfLength + tol) return false;
+  if (!(p.chiselAngle > 0)) return true;
+  const Real ca = std::cos(p.chiselAngle), sa = std::sin(p.chiselAngle);
+  const Real limit = p.landHalfWidth * ca + p.halfLength * sa;
+  return std::abs(y.x()) * ca + y.z() * sa <= limit + tol;
+}
+}  // namespace
+
+// The cylinder's (and the chiselled cylinder's) lowest point along n against an independent
+// oracle: the minimum over a dense sampling of the solid's surface (every point that lies inside
+// the solid, on its round surface, its end faces and its flats). The exact minimum lies at or
+// below every sample, and within the sampling step of the best one.
+TEST(GapFunction, CylinderSupportMatchesADenseSampling) {
+  std::mt19937_64 rng(16);
+  for (int n = 0; n < 300; ++n) {
+    const RigidPart p = randomCylinder(rng, Vec3::Zero()).parts[0];
+    const Vec3 dir = randomUnit(rng);
+    const Real exact = cylinderMinAlong(p, dir);
+    const Real R = p.radius, H = p.halfLength;
+    Real best = INFINITY;
+    const int NT = 720, NZ = 400, NR = 100;
+    const auto sample = [&](const Vec3& y) {
+      if (insideCylinder(p, y, 1e-12)) best = std::min(best, y.dot(dir));
+    };
+    for (int i = 0; i < NT; ++i) {
+      const Real th = 2 * M_PI * i / NT, c = std::cos(th), sn = std::sin(th);
+      for (int k = 0; k <= NZ; ++k) sample(Vec3(R * c, R * sn, -H + 2 * H * k / NZ));  // round surface
+      for (int k = 0; k <= NR; ++k) {
+        const Real r = R * k / NR;
+        sample(Vec3(r * c, r * sn, -H)), sample(Vec3(r * c, r * sn, H));  // end faces
+      }
+      if (p.chiselAngle > 0)  // the flats: for each height, the point where the flat meets the azimuth's ray
+        for (int k = 0; k <= NZ; ++k) {
+          const Real z = -H + 2 * H * k / NZ, x = p.landHalfWidth + (H - z) * std::tan(p.chiselAngle);
+          const Real y = 1.2 * R * (2.0 * i / NT - 1);
+          sample(Vec3(x, y, z)), sample(Vec3(-x, y, z));
+        }
+    }
+    ASSERT_TRUE(std::isfinite(best));
+    EXPECT_LE(exact, best + 1e-15) << "n " << n;
+    EXPECT_GE(exact, best - 0.05 * (R + H)) << "n " << n;  // grossly wrong only
+    EXPECT_NEAR(exact, best, 2e-3 * (R + H)) << "n " << n;  // the sampling's resolution
+  }
+}
+
+// A CP and a cylinder part (RCC or FSP): the box's separating-plane form on the direction that leaves
+// the CP the most room; its gradient in the nodes, the translation and the rotation is the row.
+TEST(GapFunction, CylinderRowIsTheGradientOfTheGap) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  int tested = 0;
+  Real worst = 0;
+  for (int n = 0; n < kConfigs; ++n) {
+    const Vec3 t = randomUnit(rng);
+    const Vec3 c0 = 2.5e-3 * Vec3(u(rng), u(rng), u(rng));
+    Fabric f = randomPair(rng, c0 - 0.4e-3 * t, c0 + 0.4e-3 * t, Vec3(5e-3, 0, 0), Vec3(6e-3, 0, 0));
+    RigidBody b = randomCylinder(rng, Vec3::Zero());
+    BodyContact c[2];
+    const int m = bodyGap(f, 0, b, 0, 1.0, 1.0, SectionRule::ConstantArea, c);  // a huge reach: listed
+    ASSERT_EQ(m, 2);
+    for (int q = 0; q < m; ++q) {
+      bodyMatches(f, b, c[q], 1e-11, 1e-5, worst);
+      ++tested;
+    }
+  }
+  EXPECT_EQ(tested, 2 * kConfigs);
+}
+
+// For a round cylinder and a circular section (a disk of radius r0 across the yarn) the gap lies
+// between two independent oracles: at least the distance from the node to the cylinder minus r0 (the
+// disk lies within the ball of radius r0: the candidate directions hold the closest point's), at
+// most the distance between the disk and the cylinder (a separating plane never reports more room
+// than there is), the latter from a dense sampling of the disk and the closed-form distance of a
+// point to a cylinder (its axial and radial coordinates clamped). Separated configurations.
+TEST(GapFunction, CylinderGapLiesBetweenTheBallAndTheDiskDistances) {
+  std::mt19937_64 rng(18);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  int tested = 0;
+  Real worstBelow = 0;
+  for (int n = 0; n < kConfigs; ++n) {
+    RigidBody b = randomCylinder(rng, Vec3::Zero());
+    RigidPart& p = b.parts[0];
+    p.chiselAngle = 0, p.landHalfWidth = 0;
+    const Vec3 t = randomUnit(rng);
+    const Vec3 c0 = 3e-3 * Vec3(u(rng), u(rng), u(rng));
+    Fabric f = randomPair(rng, c0 - 0.4e-3 * t, c0 + 0.4e-3 * t, Vec3(5e-3, 0, 0), Vec3(6e-3, 0, 0));
+    for (Index k = 0; k < 2; ++k) f.secFlat[k] = 0;  // circular
+    BodyContact c[2];
+    ASSERT_EQ(bodyGap(f, 0, b, 0, 1.0, 1.0, SectionRule::ConstantArea, c), 2);
+    const Mat3 A = b.partAxes(0);
+    const auto dist = [&](const Vec3& x) {  // distance of a point outside the round cylinder, or - depth inside
+      const Vec3 q = A.transpose() * (x - b.partCentre(0));
+      const Real dr = std::hypot(q.x(), q.y()) - p.radius, dz = std::abs(q.z()) - p.halfLength;
+      return (dr > 0 || dz > 0) ? std::hypot(std::max(dr, Real(0)), std::max(dz, Real(0))) : std::max(dr, dz);
+    };
+    const Vec3 e1 = t.unitOrthogonal(), e2 = t.cross(e1);
+    for (int k = 0; k < 2; ++k) {
+      const Real r0 = f.secRadius[k], ball = dist(f.pos[k]) - r0;
+      if (ball < 1e-5) continue;  // separated configurations only
+      Real disk = INFINITY;
+      for (int i = 0; i < 256; ++i)
+        for (int j = 1; j <= 16; ++j) {
+          const Real th = 2 * M_PI * i / 256, r = r0 * j / 16;
+          disk = std::min(disk, dist(f.pos[k] + r * (std::cos(th) * e1 + std::sin(th) * e2)));
+        }
+      disk = std::min(disk, dist(f.pos[k]));
+      EXPECT_GE(c[k].gap, ball - 1e-12) << "n " << n << " node " << k;
+      EXPECT_LE(c[k].gap, disk + 1e-12) << "n " << n << " node " << k;
+      worstBelow = std::max(worstBelow, disk - c[k].gap);
+      ++tested;
+    }
+  }
+  EXPECT_GT(tested, kConfigs / 2);
+  RecordProperty("largest_gap_below_disk_distance_m", std::to_string(worstBelow));
+}
+
 // The closest point of an ellipse against a dense sampling of its boundary (2e5 points), inside and
 // outside, for flat and round ellipses.
 TEST(GapFunction, ClosestPointOnAnEllipseMatchesADenseSampling) {
@@ -305,7 +450,7 @@ TEST(GapFunction, MeasureMemoryLetsTheMeasureGrowOnlyIntoRoom) {
       EXPECT_NEAR(k.hA * c0.hB, k.hB * c0.hA, 1e-14 * c0.hA * c0.hB);  // shared as before
       const Vec3 pA = c0.point - (c0.hA + 0.5 * c0.gap) * c0.normal;
       EXPECT_LT((k.point - (pA + (k.hA + 0.5 * k.gap) * k.normal)).norm(), 1e-18);
-      if (remembered >= H) EXPECT_EQ(k.gap, c0.gap);            // room enough: untouched, bit for bit
+      if (remembered >= H) { EXPECT_EQ(k.gap, c0.gap); }        // room enough: untouched, bit for bit
       // The cap holds for the rest of the step: sections measured again (after flattening) obey it.
       CPContact again = k;
       remeasure(f, again, SectionRule::ConstantArea, true);
@@ -341,4 +486,51 @@ TEST(GapFunction, SkewSideBySidePiecesHoldTheirClosestApproach) {
   ASSERT_EQ(pairGaps(g, 0, 1, true, SectionRule::ConstantArea, nullptr, c), 2);
   EXPECT_NEAR(std::min(c[0].sA, c[1].sA), 0.0, 1e-12);
   EXPECT_NEAR(std::max(c[0].sA, c[1].sA), 1.0, 1e-12);
+}
+
+// Side-by-side ends held by the segment end that makes them (SideAnchor): where B's ends lie
+// alongside A, each end of the shared part is B's end with A's closest point to it, a
+// vertex-segment distance (checked against the point-line distance computed here). Skew pieces
+// slide the shared part along A as they move: the last step's contact measured again at the new
+// positions (what its row and the projection act on) must equal the next narrow phase's end, so
+// that sliding opens no gap between them (a point held at its place on A left 10-15 um a step).
+TEST(GapFunction, SideBySideEndsAreHeldByTheEndsThatMakeThem) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<Real> angle(2, 18), gap(20e-6, 0.4e-3), shift(-0.2, 0.2), move(-20e-6, 20e-6);
+  const Real L = 0.4e-3, deg = 3.14159265358979323846 / 180;
+  int checked = 0;
+  for (int n = 0; n < 2000; ++n) {
+    const Real a = angle(rng) * deg, z = gap(rng), c0 = shift(rng) * L;
+    const Vec3 u(std::cos(a), std::sin(a), 0), mid(c0, 0, z);
+    Fabric f = randomPair(rng, Vec3(-L, 0, 0), Vec3(L, 0, 0), mid - 0.5 * L * u, mid + 0.5 * L * u);
+    CPContact c[2];
+    ASSERT_EQ(pairGaps(f, 0, 1, true, SectionRule::ConstantArea, nullptr, c), 2);
+    const Vec3 eA = f.pos[1] - f.pos[0];
+    for (int q = 0; q < 2; ++q) {
+      if (c[q].anchor == SideAnchor::Closest) continue;  // an X inside the shared part
+      ASSERT_EQ(c[q].anchor, SideAnchor::B);
+      ASSERT_TRUE(c[q].sB == 0 || c[q].sB == 1);
+      const Vec3 end = f.pos[2 + static_cast<Index>(c[q].sB)];
+      const Real foot = (end - f.pos[0]).dot(eA) / eA.squaredNorm();
+      EXPECT_NEAR(c[q].sA, foot, 1e-14);
+      const Real r = (end - f.pos[0]).cross(eA).norm() / eA.norm();  // point-line distance
+      EXPECT_NEAR(c[q].gap + c[q].hA + c[q].hB, r, 1e-15);
+    }
+    // B moves a little (a translation and a turn about its middle), the shared part slides.
+    const Vec3 t(move(rng), move(rng), move(rng));
+    const Real turn = 0.01 * move(rng) / 20e-6;
+    const Vec3 m = 0.5 * (f.pos[2] + f.pos[3]);
+    for (Index k = 2; k < 4; ++k) f.pos[k] = m + Eigen::AngleAxis<Real>(turn, Vec3::UnitZ()) * (f.pos[k] - m) + t;
+    CPContact fresh[2];
+    ASSERT_EQ(pairGaps(f, 0, 1, true, SectionRule::ConstantArea, nullptr, fresh), 2);
+    for (int q = 0; q < 2; ++q) {
+      if (c[q].anchor != SideAnchor::B || fresh[q].anchor != SideAnchor::B || fresh[q].sB != c[q].sB) continue;
+      CPContact again = c[q];
+      remeasure(f, again, SectionRule::ConstantArea, true);
+      EXPECT_NEAR(again.sA, fresh[q].sA, 1e-14);
+      EXPECT_NEAR(again.gap, fresh[q].gap, 1e-15) << "configuration " << n;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 1000);
 }

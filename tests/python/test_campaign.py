@@ -18,7 +18,7 @@ SCENE = 'side=0.00635 size=2e-3 mass=0.2e-3 samples=10 clear_steps=20 energy_lim
 KEYS = ['velocities=40,50,55,60,65,70,80,100', 'seeds=1,2,3,4,5', 'weibull_m=3', 't_end=6e-5',
         'scene=%s' % SCENE, 'boot=100']
 N_RUNS = 40
-TIMING = ('wall_seconds', 'cpu_seconds', 'cp_steps_per_second', 'phase_seconds', 'mirror_seconds')
+TIMING = ('wall_seconds', 'cpu_seconds', 'cp_steps_per_second', 'phase_seconds', 'mirror_seconds', 'pictures_seconds')
 
 
 def campaign_cmd(out, *extra):
@@ -136,7 +136,8 @@ def test_unreachable_scheduler_is_refused_naming_the_key(tmp_path):
 @pytest.mark.parametrize('arg,key', [('velocities=abc', 'velocities'), ('velocities=-5', 'velocities'),
                                      ('seeds=1,1', 'seeds'), ('backend=mpi', 'backend'), ('jobs=0', 'jobs'),
                                      ('scheduler=tcp://x:1', 'scheduler'), ('scene=V=3', 'scene'),
-                                     ('level=1', 'level')])
+                                     ('level=1', 'level'), ('scene=friction=3', 'friction'),
+                                     ('scene=body_friction=-0.5', 'body_friction')])
 def test_bad_keys_name_the_key(tmp_path, arg, key):
     r = subprocess.run(['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'campaign.py'), 'out=%s' % tmp_path, arg],
                        cwd=str(tmp_path), capture_output=True, text=True, timeout=120)

@@ -14,7 +14,9 @@ def small():
 
 @pytest.mark.parametrize('key, value, allowed', [('mcd', 0.0, '(0, 1)'), ('mcd', 1.0, '(0, 1)'),
                                                  ('restitution', 1.5, '[0, 1]'), ('restitution', -0.1, '[0, 1]'),
-                                                 ('friction', -0.2, '[0, inf)'), ('margin', -1e-9, '[0, inf) m'),
+                                                 ('friction', -0.2, '[0, 2]'), ('friction', 2.5, '[0, 2]'),
+                                                 ('body_friction', -0.1, '[0, 2]'), ('body_friction', float('nan'), '[0, 2]'),
+                                                 ('margin', -1e-9, '[0, inf) m'),
                                                  ('section_rule', 'oval', "'paper'"), ('broad_phase', 'octree', "'grid'")])
 def test_bad_contact_parameter_names_key_and_range(small, key, value, allowed):
     with pytest.raises(ValueError) as e:
