@@ -84,7 +84,8 @@ Outcome tension(int threads, int steps) {
 }
 
 // A 40 x 40-yarn ply (one CP per crossing, ~3200 CPs, every yarn end clamped, grid broad phase) and
-// a 3 mm, 1 g cube touching its middle at 1000 m/s; breakage at 1 % raw strain.
+// a 3 mm, 1 g cube touching its middle at 1000 m/s; breakage at 1 % raw strain; friction between
+// yarns and with the cube.
 Outcome ballistic(int threads, int steps) {
   setThreads(threads);
   WeaveParams p = km2_706();
@@ -93,6 +94,7 @@ Outcome ballistic(int threads, int steps) {
   FabricEngine e(buildWeave(p).fabric);
   ContactParams c;
   c.positionCorrection = 0, c.flattenPasses = 1, c.maxIterations = 10, c.skin = 1e-5;
+  c.friction = 0.1, c.bodyFriction = 0.2;  // friction's energy share is summed per row, then in row order
   e.enableCollisions(c, BroadPhase::Grid);
   for (const Yarn& y : e.fabric().yarns) e.dynamics().fix(y.firstNode), e.dynamics().fix(y.firstNode + y.nNodes - 1);
   BreakageParams b;
