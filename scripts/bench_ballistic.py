@@ -1,11 +1,14 @@
 # Benchmark of the default ballistic scene (scripts/ballistic.py's defaults: KM2 706 single ply 50.8 mm,
 # clamped on 4 edges, cube 1.1 g at 200 m/s), all in one process on one core:
-#   yade -n -x scripts/bench_ballistic.py [t_end=1e-4] [chain_steps=300] [out=DIR]
+#   yade -n -x scripts/bench_ballistic.py [t_end=1e-4] [chain_steps=300] [threads=1] [out=DIR]
 #   yade -n -x scripts/bench_ballistic.py plies=8 V=400 shape=rcc t_end=2e-5     # the pack case (docs/ballistic.md)
 # 1. baseline: the same ply's springs and integration alone (collisions and breakage off), chain_steps steps;
 # 2. the coupled scene for t_end without stopping at perforation: wall time, CP-steps per second and
 #    the time by phase (refit, broad, narrow, response from the collision stage's clocks; springs,
-#    integration, breakage and the YADE adapter as the rest).
+#    integration, breakage, the position projection and the YADE adapter as the rest).
+# 3. threads = N >= 2 (run with yade -j N): the coupled scene once more on N threads in this process
+#    (woven.set_threads), its speed-up over step 2 and whether both runs end in the same bits
+#    (fabric positions and velocities, energy books, projectile); a difference fails the run.
 # Prints the figures, the ratio to the baseline and to the goal (100 us in 30 s), and writes
 # out/bench_ballistic/summary.json.
 import json
@@ -29,7 +32,10 @@ p = read_params({'t_end': (1e-4, 's', 'simulated time of the coupled run'),
                  'ply_angles': ('0', 'deg', 'in-plane angle of each ply, comma-separated (one for all)'),
                  'V': (200.0, 'm/s', 'impact speed, (0, 5000]'),
                  'shape': ('box', '', "the scene's projectile: 'box' (1.1 g cube), 'sphere', 'rcc' or 'fsp' (woven.projectiles)"),
+                 'threads': (1, '', 'threads of a second coupled run compared with one thread, in [1, 64] (1: one run only)'),
                  'out': ('', '', 'output folder (default out/bench_ballistic)')})
+if not (isinstance(p.threads, int) and 1 <= p.threads <= 64):
+    raise ValueError('threads = %r is invalid: allowed an integer in [1, 64]' % (p.threads,))
 if not 1 <= p.plies <= woven.pack.MAX_PLIES:
     raise ValueError('plies = %r is invalid: allowed [1, %d]' % (p.plies, woven.pack.MAX_PLIES))
 if not (0 < p.V <= 5000):
@@ -38,6 +44,9 @@ if p.shape not in woven.ballistic.SHAPES:
     raise ValueError('shape = %r is invalid: allowed %s' % (p.shape, ', '.join(woven.ballistic.SHAPES)))
 ply_angles = woven.pack.parse_angles(p.ply_angles, p.plies)
 d = out_dir('bench_ballistic', p)
+if p.threads > 1 and woven.openmp_threads() < p.threads:
+    print('bench_ballistic: WARNING: OpenMP has %d thread(s) here (yade -j %d missing?): idle threads sleep between '
+          'regions and the speed-up is understated' % (woven.openmp_threads(), p.threads))
 weave_args = {'preset': 'km2_706', 'nx': 0, 'ny': 0, 'cp_per_span': p.cp_per_span}
 # The scene's contact settings (scripts/ballistic.py)
 contact_args = {k: v[0] for k, v in CONTACT_KEYS.items()}
@@ -57,27 +66,39 @@ be.run(dt, p.chain_steps)
 chain_seconds = time.perf_counter() - t0
 chain_rate = be.n_elements * p.chain_steps / chain_seconds
 
-# 2. the coupled scene
-O.engines = []
-O.bodies.clear()
-ply = woven.ballistic.build_ply(weave_args, contact_args, side=p.side, clamp=4,
-                                breakage=dict(strain=0.0, filter_length=-4.0, weibull_m=0.0, seed=1),
-                                plies=p.plies, ply_angles=ply_angles)
-if p.shape in ('rcc', 'fsp'):
-    solid = woven.projectiles.solid(p.shape)
-    proj = woven.ballistic.add_projectile(ply, p.shape, solid['mass'], 2 * solid['radius'], p.V, solid=solid)
-else:
-    proj = woven.ballistic.add_projectile(ply, p.shape, V=p.V)
-O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
-woven.attach(ply.engine)
+# 2. the coupled scene (3.: again on p.threads threads)
+def coupled(threads):
+    """Builds and runs the coupled scene on `threads` threads; returns (ply, projectile, wall seconds,
+    phase seconds, final state)."""
+    woven.set_threads(threads)
+    O.engines = []
+    O.bodies.clear()
+    O.resetTime()
+    ply = woven.ballistic.build_ply(weave_args, contact_args, side=p.side, clamp=4,
+                                    breakage=dict(strain=0.0, filter_length=-4.0, weibull_m=0.0, seed=1),
+                                    plies=p.plies, ply_angles=ply_angles)
+    if p.shape in ('rcc', 'fsp'):
+        solid = woven.projectiles.solid(p.shape)
+        proj = woven.ballistic.add_projectile(ply, p.shape, solid['mass'], 2 * solid['radius'], p.V, solid=solid)
+    else:
+        proj = woven.ballistic.add_projectile(ply, p.shape, V=p.V)
+    O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
+    woven.attach(ply.engine)
+    t0 = time.perf_counter()
+    O.run(int(round(p.t_end / O.dt)), True)
+    wall = time.perf_counter() - t0
+    s = ply.engine.collision_stats()
+    phases = {'refit': s['seconds_refit'], 'broad': s['seconds_broad'], 'narrow': s['seconds_narrow'],
+              'response': s['seconds_respond']}
+    phases['springs_integration_breakage_adapter'] = wall - sum(phases.values())
+    state = (ply.engine._positions(), ply.engine._velocities(), sorted(ply.engine.energy().items()),
+             tuple(proj.state.vel), tuple(proj.state.pos))
+    woven.set_threads(0)
+    return ply, proj, wall, phases, state
+
+
+ply, proj, wall, phases, state = coupled(1)
 steps = int(round(p.t_end / O.dt))
-t0 = time.perf_counter()
-O.run(steps, True)
-wall = time.perf_counter() - t0
-s = ply.engine.collision_stats()
-phases = {'refit': s['seconds_refit'], 'broad': s['seconds_broad'], 'narrow': s['seconds_narrow'],
-          'response': s['seconds_respond']}
-phases['springs_integration_breakage_adapter'] = wall - sum(phases.values())
 rate = ply.engine.n_elements * steps / wall
 per_100us = wall * 1e-4 / (steps * O.dt)
 measured = {'cps': ply.engine.n_elements, 'steps': steps, 'dt': O.dt, 'simulated_time': steps * O.dt,
@@ -86,11 +107,27 @@ measured = {'cps': ply.engine.n_elements, 'steps': steps, 'dt': O.dt, 'simulated
             'wall_seconds_per_100us': per_100us, 'goal_ratio': per_100us / p.goal_seconds,
             'chain_only_cp_steps_per_second': chain_rate, 'coupled_over_chain': rate / chain_rate,
             'projectile_velocity_end': -proj.state.vel[2], 'broken_elements': ply.engine.broken_elements}
-write_summary(d, 'bench_ballistic', p, measured, {'goal_wall_seconds_per_100us': p.goal_seconds},
+checks, status = {}, 'ok'
+if p.threads > 1:
+    _, _, wall_n, phases_n, state_n = coupled(p.threads)
+    same = state_n == state
+    measured.update({'threads': p.threads, 'wall_seconds_n_threads': wall_n, 'phase_seconds_n_threads': phases_n,
+                     'speedup': wall / wall_n, 'same_bits': bool(same)})
+    checks['same_bits'] = {'value': bool(same), 'limit': True, 'passed': bool(same),
+                           'what': 'positions, velocities, energy books and projectile equal bit for bit on 1 and N threads'}
+    status = 'ok' if same else 'failed'
+write_summary(d, 'bench_ballistic', p, measured, {'goal_wall_seconds_per_100us': p.goal_seconds, 'goal_speedup_2_cores': 1.8},
               {'wall_seconds': 's', 'dt': 's', 'simulated_time': 's', 'cp_steps_per_second': '1/s',
-               'phase_seconds': 's', 'wall_seconds_per_100us': 's', 'chain_only_cp_steps_per_second': '1/s'}, 'ok')
+               'phase_seconds': 's', 'wall_seconds_per_100us': 's', 'chain_only_cp_steps_per_second': '1/s',
+               'wall_seconds_n_threads': 's', 'phase_seconds_n_threads': 's'}, status, checks)
 print('bench_ballistic: %d CPs, %d steps of %.3g s (%.1f us) in %.1f s: %.3g CP-steps/s' %
       (ply.engine.n_elements, steps, O.dt, steps * O.dt * 1e6, wall, rate))
 print('  by phase: ' + ', '.join('%s %.1f s (%.0f %%)' % (k, v, 100 * v / wall) for k, v in phases.items()))
 print('  springs + integration alone: %.3g CP-steps/s; coupled / alone = %.3g' % (chain_rate, rate / chain_rate))
 print('  100 us of this scene: %.1f s; goal %.0f s -> %.2fx the goal' % (per_100us, p.goal_seconds, per_100us / p.goal_seconds))
+if p.threads > 1:
+    print('  %d threads: %.1f s (%s): %.2fx one thread; same bits: %s' %
+          (p.threads, wall_n, ', '.join('%s %.1f s' % kv for kv in phases_n.items()), wall / wall_n, same))
+if status != 'ok':
+    import sys
+    sys.exit(1)

@@ -583,7 +583,7 @@ Real CollisionStage::afterDrift(Fabric& f, Real dt) {
   stats.projection = ProjectionReport{};
   if (const int sweeps = params_.projectionSweepCount(); sweeps > 0) {
     projector_.project(f, contacts_, bodyContacts_, bodies, capacityOf(f), sweeps, params_.projectionSlop,
-                       params_.projectionMaxMove, params_.rule, dt, stats.projection);
+                       params_.projectionMaxMove, params_.rule, dt, stats.projection, params_.sweepOrder);
     projectionEnergy_ += stats.projection.energy;
     stats.projectionEnergy += stats.projection.energy;
   }

@@ -11,6 +11,13 @@ ContactModel contactModelByName(const std::string& name) {
                        "'gap' (gap functions, exact gradient rows, position projection) or 'paper' (Sections 4-5)");
 }
 
+SweepOrder sweepOrderByName(const std::string& name) {
+  if (name == "coloured") return SweepOrder::Coloured;
+  if (name == "sequential") return SweepOrder::Sequential;
+  throw ParameterError("sweep_order", "'" + name + "'",
+                       "'coloured' (colour by colour on the threads) or 'sequential' (contact order, serial)");
+}
+
 Response responseByName(const std::string& name) {
   if (name == "impulse") return Response::Impulse;
   if (name == "penalty") return Response::Penalty;
@@ -42,6 +49,7 @@ void ContactParams::validate() const {
   require(std::isfinite(correctionSlop) && correctionSlop >= 0, "correction_slop", correctionSlop, "[0, inf) m");
   require(std::isfinite(cacheDistance) && cacheDistance >= 0, "contact_cache", cacheDistance, "[0, inf) m (0: off)");
   require(threads >= 0 && threads <= 64, "threads", threads, "[0, 64] (0: OpenMP's count)");
+  require(static_cast<int>(sweepOrder) <= 1, "sweep_order", static_cast<int>(sweepOrder), "'coloured' or 'sequential'");
   require(std::isfinite(penaltyStiffness) && penaltyStiffness > 0, "penalty_stiffness", penaltyStiffness, "(0, inf) N/m");
   require(std::isfinite(penaltyDamping) && penaltyDamping >= 0 && penaltyDamping < 1, "penalty_damping", penaltyDamping,
           "[0, 1) (damping ratio)");

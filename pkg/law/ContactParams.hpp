@@ -27,6 +27,17 @@ enum class ContactModel : std::uint8_t {
   /// on the sections along it, moving SAT for first contacts, pre-drift positional correction.
   Paper = 1
 };
+/// Row order of the Gauss-Seidel sweeps (impulse rows and position projection; law/RowColouring).
+enum class SweepOrder : std::uint8_t {
+  /// Colour by colour (rows of a colour share no node, solved at once on the threads), the rows on
+  /// a rigid body last: the default, the order that lets the sweeps use the threads.
+  Coloured = 0,
+  /// One row after another in contact order, the body rows last (the order before the colouring):
+  /// serial, for comparison.
+  Sequential = 1
+};
+/// "coloured" or "sequential"; throws ParameterError("sweep_order") otherwise.
+SweepOrder sweepOrderByName(const std::string& name);
 /// "gap" or "paper"; throws ParameterError("contact_model") otherwise.
 ContactModel contactModelByName(const std::string& name);
 /// "impulse" or "penalty"; throws ParameterError("response") otherwise.
@@ -88,6 +99,8 @@ struct ContactParams {
   /// i.e. OMP_NUM_THREADS or YADE's -j N, unless woven.set_threads forced one), >= 1 forces this
   /// count. Any count gives the same contacts and the same state, bit for bit (core/Parallel.hpp).
   int threads = 0;
+  /// Row order of the impulse and projection sweeps. Every thread count gives the same bits in either.
+  SweepOrder sweepOrder = SweepOrder::Coloured;
 
   Response response = Response::Impulse;
   /// Penalty stiffness k_p [N/m] > 0 (response Penalty): F = k_p delta on a contact overlapping by

@@ -2,6 +2,7 @@
 #include "core/Parallel.hpp"
 #include "fabric/SpringEnergy.hpp"
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 namespace woven {
@@ -66,44 +67,42 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
                          const ContactParams& p, ImpulseReport& rep, const std::vector<BodyContact>& bodyContacts,
                          std::vector<RigidBody>* bodies) {
   rep = ImpulseReport{};
-  rows_.clear();
   loadBodies(bodies);
-  // Which contacts need a row, each on its own (threads; the capacity is the costly part and reads
-  // nothing the rows change); then the rows in contact order.
+  // Which contacts need a row and their rows, each contact on its own (threads; the capacity is the
+  // costly part and reads nothing the rows change); then the body rows, one by one.
   const Index nc = static_cast<Index>(contacts.size());
-  allowed_.resize(contacts.size());
+  slots_.resize(contacts.size());
   // Model Gap: a row for every listed contact (the multiplier's sign decides); one that does not
   // approach beyond its gap at the start gets the gap as its room (its flattening capacity is not
   // measured: the row then stops it at the gap if other rows push it on).
   const bool everyContact = p.model == ContactModel::Gap;
   parallelFor(nc, 256, threads(), [&](Index c) {
-    Index node[4];
-    Real w[4];
-    nodesAndWeights(f, contacts[c], node, w);
-    const Real vn0 = relativeVelocity(f, node, w).dot(contacts[c].normal);
-    // Approach the room absorbs: the gap, and what flattening can still take, unless the contact is
-    // still overlapping after the flattening passes (flattening has stopped working for it).
-    const Real gap = contacts[c].gap;
-    allowed_[c] = everyContact ? std::max(gap, Real(0)) / dt : NAN;
-    if (!(vn0 < -std::max(gap, Real(0)) / dt - p.tolerance)) return;  // separating, resting (Eq. 4), or within the gap
-    const Real allowed = (gap < 0 ? 0.0 : gap + capacity(contacts[c])) / dt;
-    if (!everyContact && !(vn0 < -allowed - p.tolerance)) return;  // taken up by flattening
-    allowed_[c] = allowed;
-  });
-  for (Index c = 0; c < nc; ++c) {
-    const Real allowed = allowed_[c];
-    if (std::isnan(allowed)) continue;
-    Row r;
+    Row& r = slots_[c];
+    r.invK = 0;  // no row
     nodesAndWeights(f, contacts[c], r.node, r.w);
     r.n = contacts[c].normal;
     r.vn0 = relativeVelocity(f, r.node, r.w).dot(r.n);
+    // Approach the room absorbs: the gap, and what flattening can still take, unless the contact is
+    // still overlapping after the flattening passes (flattening has stopped working for it).
+    const Real gap = contacts[c].gap;
+    Real allowed = std::max(gap, Real(0)) / dt;
+    if (r.vn0 < -allowed - p.tolerance) {  // neither separating, resting (Eq. 4), nor within the gap
+      allowed = (gap < 0 ? 0.0 : gap + capacity(contacts[c])) / dt;
+      if (!everyContact && !(r.vn0 < -allowed - p.tolerance)) return;  // taken up by flattening
+    } else if (!everyContact) {
+      return;
+    }
     Real K = 0;
     for (int k = 0; k < 4; ++k) K += r.w[k] * r.w[k] * f.invMass[r.node[k]];
-    if (!(K > 0)) continue;  // both CPs kinematic
+    if (!(K > 0)) return;  // both CPs kinematic
     r.invK = 1 / K;
     r.target = -allowed;
-    rows_.push_back(r);
-  }
+    r.lambda = 0, r.lambdaT.setZero(), r.body = -1, r.arm.setZero();
+  });
+  yarnRows_.clear();
+  for (Index c = 0; c < nc; ++c)
+    if (slots_[c].invK > 0) yarnRows_.push_back(c);
+  bodyRows_.clear();
   for (const BodyContact& c : bodyContacts) {
     Row r;
     r.node[0] = f.elem0[c.cp], r.node[1] = r.node[0] + 1, r.node[2] = r.node[3] = r.node[0];
@@ -121,10 +120,17 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     if (!(K > 0)) continue;  // kinematic CP and body
     r.invK = 1 / K;
     r.target = -allowed;
-    rows_.push_back(r);
+    bodyRows_.push_back(r);
   }
-  rep.rows = static_cast<long>(rows_.size());
-  if (rows_.empty()) return;
+  const Index nYarn = static_cast<Index>(yarnRows_.size());
+  rep.rows = static_cast<long>(nYarn + bodyRows_.size());
+  if (rep.rows == 0) {
+    rows_.clear();
+    return;
+  }
+  // The rows in contact order, then the body rows: coloured, and laid out by colour in rows_.
+  colourRows(f, static_cast<Index>(rep.rows), p.sweepOrder == SweepOrder::Coloured,
+             [&](Index r) -> const Row& { return r < nYarn ? slots_[yarnRows_[r]] : bodyRows_[r - nYarn]; });
 
   // The nodes the rows touch, each once, in the order the rows first reach them (a mark per node:
   // linear, where sorting the list cost 3 % of a ballistic step).
@@ -139,16 +145,21 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
 
   const bool friction = p.friction > 0 || p.bodyFriction > 0;
   if (friction)
-    for (Row& r : rows_) {
+    parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
+      Row& r = rows_[k];
       r.kick.setZero();
-      for (int k = 0; k < 4; ++k) r.kick += (0.5 * dt * r.w[k] * f.invMass[r.node[k]]) * f.force[r.node[k]];
-    }
-  frictionTaken_ = 0;
+      for (int q = 0; q < 4; ++q) r.kick += (0.5 * dt * r.w[q] * f.invMass[r.node[q]]) * f.force[r.node[q]];
+      r.frictionTaken = 0;
+    });
   rep.iterations = solve(f, p, friction);
-  rep.frictionWork = frictionTaken_;
-  for (const Row& r : rows_) {
+  if (friction)
+    for (const Row& r : rows_) rep.frictionWork += r.frictionTaken;
+  parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
+    const Row& r = rows_[k];
     const Real vn = rowVelocity(f, r).dot(r.n);
-    const Real miss = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
+    miss_[k] = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
+  });
+  for (Real miss : miss_) {
     rep.residual = std::max(rep.residual, miss);
     rep.unresolved += miss > p.tolerance;
   }
@@ -158,7 +169,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
 
 void ImpulseLaw::keepVelocities(const Fabric& f) {
   vBefore_.resize(touched_.size());
-  for (std::size_t k = 0; k < touched_.size(); ++k) vBefore_[k] = f.vel[touched_[k]];
+  parallelFor(static_cast<Index>(touched_.size()), kParallelGrain, threads(), [&](Index k) { vBefore_[k] = f.vel[touched_[k]]; });
 }
 
 // The impulses change v_{n+1/2} by dv, which is v_n + (dt/2) a_n: the kinetic energy of step n
@@ -179,32 +190,77 @@ Real ImpulseLaw::energyChange(const Fabric& f) const {
   });
 }
 
+// The rows by colour (law/RowColouring: rows of one colour share no node), the body rows last, laid
+// out in that order in rows_ (rowAt(r): row r of the list, which rows_ must not hold): the sweeps
+// then solve each colour's rows at once on the threads, and the body rows one by one. Not
+// coloured (SweepOrder::Sequential): every row in the serial tail, in list order.
+template <class RowAt>
+void ImpulseLaw::colourRows(const Fabric& f, Index n, bool coloured, RowAt&& rowAt) {
+  colouring_.build(n, f.nNodes(), [&](Index r, Index* node) {
+    const Row& q = rowAt(r);
+    if (q.body >= 0 || !coloured) return -1;  // all of a body's rows share it
+    for (int k = 0; k < 4; ++k) node[k] = q.node[k];
+    return 4;
+  });
+  rows_.resize(static_cast<std::size_t>(n));
+  parallelFor(n, kParallelGrain, threads(), [&](Index k) { rows_[k] = rowAt(colouring_.order()[k]); });
+  for (int c = 0; c <= RowColouring::kColours + 1; ++c) start_[c] = colouring_.begin(c);
+}
+
+// One Gauss-Seidel update of row r (projected on J >= 0 and the friction cone); returns how far the
+// row missed its target before it (below it, or above it while still pushing: the accumulated
+// impulse can give back) [m/s].
+Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool friction) {
+  const Vec3 vr = rowVelocity(f, r);
+  const Real vn = vr.dot(r.n);
+  const Real miss = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
+  const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
+  Vec3 J = (lambda - r.lambda) * r.n;
+  r.lambda = lambda;
+  const Real mu = r.body >= 0 ? p.bodyFriction : p.friction;
+  Vec3 Jt = Vec3::Zero();
+  if (friction && mu > 0) {  // Coulomb: cancel the tangential slip, within the cone mu * lambda
+    const Vec3 vt = vr - vn * r.n;
+    Vec3 lt = r.lambdaT - vt * r.invK;
+    const Real lim = mu * r.lambda, len = lt.norm();
+    if (len > lim) lt *= lim / len;
+    Jt = lt - r.lambdaT;
+    J += Jt;
+    r.lambdaT = lt;
+  }
+  applyRow(f, r, J);
+  if (friction && mu > 0)  // the tangential part's share of this update's energy (see the header)
+    r.frictionTaken -= Jt.dot(0.5 * (vr + rowVelocity(f, r)) - r.kick);
+  return miss;
+}
+
+// Coloured sweeps: the colours in order, each colour's rows on the threads (they share no node:
+// each writes only its own nodes, so any split gives the same bits), then the serial tail (the
+// rows on a body) in order. A colour's misses are kept per row; their largest is order-free.
+// Whether the colours are split over the threads changes no result, only the time: a sweep costs
+// a barrier per colour, and on cores busy with other processes each barrier waits for a thread
+// that is not running (measured, bench_threads at a load of 3-13 on 2 cores: the response phase
+// 8-13x slower on 2 threads than on 1 with every sweep split). So the first sweep of a step runs
+// split and the second on one thread, both timed, and the rest of the step's sweeps as the faster.
 int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
+  using Clock = std::chrono::steady_clock;
+  const int nThreads = threads();
+  miss_.resize(rows_.size());
+  const int colours = colouring_.colours();
+  double seconds[2] = {0, 0};  // of the split sweep and of the one-thread sweep
   for (int it = 0; it < p.maxIterations; ++it) {
-    Real worst = 0;
-    for (Row& r : rows_) {
-      const Vec3 vr = rowVelocity(f, r);
-      const Real vn = vr.dot(r.n);
-      // Miss: below target, or above it while still pushing (the accumulated impulse can give back).
-      worst = std::max(worst, r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn);
-      const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
-      Vec3 J = (lambda - r.lambda) * r.n;
-      r.lambda = lambda;
-      const Real mu = r.body >= 0 ? p.bodyFriction : p.friction;
-      Vec3 Jt = Vec3::Zero();
-      if (friction && mu > 0) {  // Coulomb: cancel the tangential slip, within the cone mu * lambda
-        const Vec3 vt = vr - vn * r.n;
-        Vec3 lt = r.lambdaT - vt * r.invK;
-        const Real lim = mu * r.lambda, len = lt.norm();
-        if (len > lim) lt *= lim / len;
-        Jt = lt - r.lambdaT;
-        J += Jt;
-        r.lambdaT = lt;
-      }
-      applyRow(f, r, J);
-      if (friction && mu > 0)  // the tangential part's share of this update's energy (see the header)
-        frictionTaken_ -= Jt.dot(0.5 * (vr + rowVelocity(f, r)) - r.kick);
+    const bool split = nThreads > 1 && (it == 0 || (it > 1 && seconds[0] <= seconds[1]));
+    const auto t0 = Clock::now();
+    for (int c = 0; c < colours; ++c) {
+      const Index b = start_[c];
+      parallelFor(start_[c + 1] - b, kRowGrain, split ? nThreads : 1,
+                  [&](Index k) { miss_[b + k] = solveRow(f, rows_[b + k], p, friction); });
     }
+    if (it < 2) seconds[it] = std::chrono::duration<double>(Clock::now() - t0).count();
+    for (Index k = start_[RowColouring::kColours], n = static_cast<Index>(rows_.size()); k < n; ++k)
+      miss_[k] = solveRow(f, rows_[k], p, friction);
+    Real worst = 0;
+    for (Real m : miss_) worst = std::max(worst, m);
     if (worst <= p.tolerance) return it + 1;
   }
   return p.maxIterations;
@@ -222,6 +278,8 @@ Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p, std::vector<RigidB
     rows_[kept++] = q;
   }
   rows_.resize(kept);
+  sorted_.swap(rows_);
+  colourRows(f, static_cast<Index>(kept), p.sweepOrder == SweepOrder::Coloured, [&](Index r) -> const Row& { return sorted_[r]; });
   keepVelocities(f);
   solve(f, p, false);
   const Real work = storeBodies(bodies);

@@ -21,7 +21,10 @@
 // Simultaneous rows are solved by projected Gauss-Seidel on accumulated impulses (J >= 0, and the
 // Coulomb friction impulse within mu J; mu = ContactParams::friction between yarns, bodyFriction on
 // body rows) until no row misses its target by more than the tolerance or maxIterations is reached;
-// the residual and unresolved rows are reported, never hidden.
+// the residual and unresolved rows are reported, never hidden. The sweeps are coloured
+// (law/RowColouring): rows that share no node are solved at once on the threads, colour after
+// colour, the rows on a rigid body last in row order; the colouring follows the row list alone, so
+// every thread count gives the same bits.
 //
 // Friction's share of the energy (EnergyBooks::friction). One update of a row applies J; with u the
 // row's relative velocity before and u' after it, the half-step kinetic energy changes by exactly
@@ -31,11 +34,13 @@
 // every update of every sweep, is the friction work, and the normal parts' share is the rest, so the
 // two add up to the measured change exactly. (The final tangential impulse times a mean slip would
 // not: the sweeps clamp and re-aim J_t as J_n changes, so no single slip velocity belongs to it.)
+// Each row sums its own share over the sweeps; the rows' sums are added in row order.
 #pragma once
 #include "fabric/Fabric.hpp"
 #include "geom/BodyContact.hpp"
 #include "geom/CPContact.hpp"
 #include "law/ContactParams.hpp"
+#include "law/RowColouring.hpp"
 #include <functional>
 #include <vector>
 
@@ -57,6 +62,9 @@ struct ImpulseReport {
 
 class ImpulseLaw {
  public:
+  /// Rows of a colour below which it is solved on one thread (a parallel region costs a few us).
+  static constexpr Index kRowGrain = 256;
+
   /// What flattening can still take along a contact's normal (both CPs) [m]; asked only for contacts
   /// that approach faster than their gap alone allows.
   using Capacity = std::function<Real(const CPContact&)>;
@@ -89,6 +97,7 @@ class ImpulseLaw {
     Real lambda = 0;    // accumulated normal impulse [N s]
     Vec3 lambdaT = Vec3::Zero();
     Vec3 kick = Vec3::Zero();  // (dt/2) sum w_k a_k of the fabric nodes (friction's energy share) [m/s]
+    Real frictionTaken = 0;    // the tangential parts' energy share over this resolve's sweeps, taken out [J]
     int body = -1;      // B side: a rigid body (weights w[2], w[3] are 0), at arm r from its centre
     Vec3 arm = Vec3::Zero();
   };
@@ -102,12 +111,19 @@ class ImpulseLaw {
   void applyRow(Fabric& f, const Row& r, const Vec3& J);      // J on B, -J on A
   void loadBodies(const std::vector<RigidBody>* bodies);
   Real storeBodies(std::vector<RigidBody>* bodies);           // writes back, returns the bodies' work
-  int solve(Fabric& f, const ContactParams& p, bool friction);  // Gauss-Seidel sweeps, returns the count
+  template <class RowAt>
+  void colourRows(const Fabric& f, Index n, bool coloured, RowAt&& rowAt);  // rows_ by colour, start_ set
+  Real solveRow(Fabric& f, Row& r, const ContactParams& p, bool friction);  // returns the row's miss
+  int solve(Fabric& f, const ContactParams& p, bool friction);  // coloured Gauss-Seidel sweeps, returns the count
   void keepVelocities(const Fabric& f);      // of the touched nodes, before the impulses
   Real energyChange(const Fabric& f) const;  // kinetic energy of the integer step the impulses add [J]
-  std::vector<Row> rows_;
-  Real frictionTaken_ = 0;     // solve: the tangential parts' energy share, taken out [J]
-  std::vector<Real> allowed_;  // resolve: per contact the approach speed its room allows [m/s], NaN: no row
+  std::vector<Row> rows_, sorted_;
+  std::vector<Row> slots_;      // resolve: per contact its row (invK 0: none)
+  std::vector<Index> yarnRows_;  // the contacts with a row, in order
+  std::vector<Row> bodyRows_;
+  RowColouring colouring_;
+  Index start_[RowColouring::kColours + 2] = {};  // rows_[start_[c], start_[c + 1]): colour c, the tail last
+  std::vector<Real> miss_;                        // per row: its miss in the last sweep [m/s]
   std::vector<BodyVelocity> bodyVel_;
   Vec3Array vBefore_;
   Real dt_ = 0;

@@ -1,35 +1,42 @@
 #include "law/PositionProjection.hpp"
 #include "fabric/SpringEnergy.hpp"
 #include "geom/GapFunction.hpp"
+#include "core/Parallel.hpp"
+#include <algorithm>
 #include <cmath>
 
 namespace woven {
 
 void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
                                  std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop,
-                                 Real maxMove, SectionRule rule, Real dt, ProjectionReport& rep) {
+                                 Real maxMove, SectionRule rule, Real dt, ProjectionReport& rep, SweepOrder order) {
   rep = ProjectionReport{};
   if (sweeps <= 0 || (contacts.empty() && bodyContacts.empty())) return;
+  const Index nc = static_cast<Index>(contacts.size());
   allowance_.assign(contacts.size(), NAN);
-  marked_.resize(f.nElems(), 0);
-  elems_.clear();
-  forceBefore_.clear();
-  Real before = 0;
-  // Before node k moves for the first time, the spring energy of its (at most two) CPs is counted.
-  const auto touch = [&](Index k) {
-    const Yarn& y = f.yarns[f.nodeYarn[k]];
-    const Index local = k - y.firstNode;
-    for (Index e : {y.firstElem + local - 1, y.firstElem + local})
-      if (e >= y.firstElem && e < y.firstElem + y.nElems && !marked_[e]) {
-        marked_[e] = 1, elems_.push_back(e);
-        before += springEnergy(f, e);
-        forceBefore_.push_back(springForce(f, e));
-      }
-  };
+  outcome_.resize(contacts.size());
   // After the first sweep only the contacts with a node (or a body) moved in the sweep before can
   // have changed: the others are skipped (most of a ply is at rest).
   movedNow_.assign(f.nNodes(), 0);
   travel_.assign(f.nNodes(), 0);
+  origin_.resize(f.pos.size());
+  // The contacts by colour: those of a colour share no node (law/RowColouring), and a contact reads
+  // and moves only its own four nodes, so a colour's contacts are projected at once on the threads
+  // with the same bits as one after another. The body contacts (all share the body) follow, in order.
+  // SweepOrder::Sequential: every contact in the serial tail, in order.
+  colouring_.build(nc, f.nNodes(), [&](Index q, Index* node) {
+    if (order == SweepOrder::Sequential) return -1;
+    node[0] = f.elem0[contacts[q].cpA], node[1] = node[0] + 1, node[2] = f.elem0[contacts[q].cpB], node[3] = node[2] + 1;
+    return 4;
+  });
+  // What a sweep reads first, in colour order: most contacts are skipped on it alone, without
+  // reading the contact (in colour order the contacts are scattered in memory).
+  slots_.resize(contacts.size());
+  parallelFor(nc, kParallelGrain, threads(), [&](Index k) {
+    const Index q = colouring_.order()[k];
+    const CPContact& c = contacts[q];
+    slots_[k] = {q, c.cpA, c.cpB, f.elem0[c.cpA], f.elem0[c.cpB]};
+  });
   bool bodyMoved = true;
   // The share of a move that moves no node more than maxMove, nor any node more than
   // kTravel x maxMove in all: moves beyond would carry a node into neighbours no contact was listed
@@ -43,17 +50,41 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     return scale * dl;
   };
   const auto movedBefore = [&](Index k) { return movedBefore_[k] != 0; };
-  // Moves the n nodes of a contact by dl along its gradient (w_k n, weighted by 1/m_k).
+  // Moves the n nodes of a contact by dl along its gradient (w_k n, weighted by 1/m_k); a node's
+  // position before its first move is kept for the books (travel_ is 0 until then).
   const auto move = [&](const Index* node, const Real* w, int n, Real dl, const Vec3& normal) {
     for (int k = 0; k < n; ++k)
       if (w[k] != 0 && f.invMass[node[k]] > 0) {
-        touch(node[k]);
         const Real step = w[k] * f.invMass[node[k]] * dl;
+        if (!movedAny_[node[k]]) movedAny_[node[k]] = 1, origin_[node[k]] = f.pos[node[k]];
         f.pos[node[k]] += step * normal;
         travel_[node[k]] += std::abs(step);
         movedNow_[node[k]] = 1;
       }
   };
+  movedAny_.assign(f.nNodes(), 0);
+  // One contact's move; returns the overlap beyond allowance + slop it took out (0: no move) [m].
+  const auto projectOne = [&](const Slot& slot, bool all) -> Real {
+    const Index i = slot.i, j = slot.j, q = slot.q;
+    if (!all && !(movedBefore(i) || movedBefore(i + 1) || movedBefore(j) || movedBefore(j + 1))) return 0;
+    if (!f.alive[slot.cpA] || !f.alive[slot.cpB]) return 0;  // broken in this step
+    CPContact& c = contacts[q];
+    remeasure(f, c, rule, false);
+    if (!(c.gap < -slop)) return 0;
+    if (std::isnan(allowance_[q])) allowance_[q] = allowance(c);
+    const Real C = c.gap + allowance_[q] + slop;
+    if (!(C < 0)) return 0;
+    const Index node[4] = {i, i + 1, j, j + 1};
+    const Real w[4] = {-(1 - c.sA), -c.sA, 1 - c.sB, c.sB};
+    Real K = 0;
+    for (int k = 0; k < 4; ++k) K += w[k] * w[k] * f.invMass[node[k]];
+    if (!(K > 0)) return 0;  // both CPs kinematic
+    const Real dl = share(node, w, 4, -C / K);
+    if (dl == 0) return 0;
+    move(node, w, 4, dl, c.normal);
+    return -C;
+  };
+  const int nThreads = threads();
   for (int sweep = 0; sweep < sweeps; ++sweep) {
     ++rep.sweeps;
     bool moved = false, bodyMovedNow = false;
@@ -61,28 +92,18 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     movedBefore_.swap(movedNow_);
     movedNow_.assign(f.nNodes(), 0);
     rep.overlapLeft = 0;
-    for (std::size_t q = 0; q < contacts.size(); ++q) {
-      CPContact& c = contacts[q];
-      if (!f.alive[c.cpA] || !f.alive[c.cpB]) continue;  // broken in this step
-      const Index i = f.elem0[c.cpA], j = f.elem0[c.cpB];
-      if (!all && !(movedBefore(i) || movedBefore(i + 1) || movedBefore(j) || movedBefore(j + 1))) continue;
-      remeasure(f, c, rule, false);
-      if (!(c.gap < -slop)) continue;
-      if (std::isnan(allowance_[q])) allowance_[q] = allowance(c);
-      const Real C = c.gap + allowance_[q] + slop;
-      if (!(C < 0)) continue;
-      const Index node[4] = {f.elem0[c.cpA], f.elem0[c.cpA] + 1, f.elem0[c.cpB], f.elem0[c.cpB] + 1};
-      const Real w[4] = {-(1 - c.sA), -c.sA, 1 - c.sB, c.sB};
-      Real K = 0;
-      for (int k = 0; k < 4; ++k) K += w[k] * w[k] * f.invMass[node[k]];
-      if (!(K > 0)) continue;  // both CPs kinematic
-      const Real dl = share(node, w, 4, -C / K);
-      if (dl == 0) continue;
-      move(node, w, 4, dl, c.normal);
-      ++rep.pushed;
-      moved = true;
-      rep.overlapLeft = std::max(rep.overlapLeft, -C);
+    // The first sweep measures every contact: its colours on the threads. The later ones skip
+    // most contacts on their slot alone: on one thread, in the same order (the same bits; a
+    // barrier per colour would cost more than the work where the cores are busy).
+    for (int col = 0; col < colouring_.colours(); ++col) {
+      const Index b = colouring_.begin(col);
+      parallelFor(colouring_.begin(col + 1) - b, kContactGrain, all ? nThreads : 1,
+                  [&](Index k) { outcome_[b + k] = projectOne(slots_[b + k], all); });
     }
+    // The colouring's tail (a contact that found no colour free) in order.
+    for (Index k = colouring_.begin(RowColouring::kColours); k < nc; ++k) outcome_[k] = projectOne(slots_[k], all);
+    for (Real left : outcome_)
+      if (left > 0) ++rep.pushed, moved = true, rep.overlapLeft = std::max(rep.overlapLeft, left);
     for (BodyContact& c : bodyContacts) {
       if (!f.alive[c.cp]) continue;
       const Index i = f.elem0[c.cp];
@@ -115,19 +136,46 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     bodyMoved = bodyMovedNow;
     if (!moved) break;
   }
-  Real after = 0;
-  // The step's kinetic energy takes the forces at the moved positions over the whole drift
-  // (velocity Verlet: dKE = (F_n + F_{n+1})/2 . dx): the moves change F_{n+1} by dF, and so the
-  // kinetic energy by dF . dx / 2, which is booked with the spring energy they put in.
-  Real drift = 0;
+  rep.energy = bookedEnergy(f, dt);
+}
+
+// The energy the moves put in [J], over the CPs with a moved node, in CP order: their spring energy
+// after minus before, and the step's kinetic energy that their changed forces make: velocity Verlet
+// takes the forces at the moved positions over the whole drift (dKE = (F_n + F_{n+1})/2 . dx), so
+// the moves change F_{n+1} by dF, and the kinetic energy by dF . dx / 2, dx = dt v.
+Real PositionProjection::bookedEnergy(Fabric& f, Real dt) {
+  elems_.clear();
+  for (Index k = 0; k < f.nNodes(); ++k) {
+    if (!movedAny_[k]) continue;
+    const Yarn& y = f.yarns[f.nodeYarn[k]];
+    const Index local = k - y.firstNode;
+    for (Index e : {y.firstElem + local - 1, y.firstElem + local})
+      if (e >= y.firstElem && e < y.firstElem + y.nElems && (elems_.empty() || elems_.back() != e)) elems_.push_back(e);
+  }
+  if (elems_.empty()) return 0;
+  // The CPs before the moves: the moved nodes put back where they were for the measure, then returned.
+  const auto swapMoved = [&] {
+    for (Index e : elems_)
+      for (Index k : {f.elem0[e], f.elem0[e] + 1})
+        if (movedAny_[k] == 1) std::swap(f.pos[k], origin_[k]), movedAny_[k] = 2;
+    for (Index e : elems_)
+      for (Index k : {f.elem0[e], f.elem0[e] + 1})
+        if (movedAny_[k] == 2) movedAny_[k] = 1;
+  };
+  swapMoved();
+  Real before = 0;
+  forceBefore_.resize(elems_.size());
+  for (std::size_t q = 0; q < elems_.size(); ++q) before += springEnergy(f, elems_[q]), forceBefore_[q] = springForce(f, elems_[q]);
+  swapMoved();
+  Real after = 0, drift = 0;
   for (std::size_t q = 0; q < elems_.size(); ++q) {
     const Index e = elems_[q], i = f.elem0[e];
-    after += springEnergy(f, e), marked_[e] = 0;
+    after += springEnergy(f, e);
     const Vec3 dF = springForce(f, e) - forceBefore_[q];  // on node i; its opposite on node i + 1
     const Vec3 v0 = f.invMass[i] > 0 ? f.vel[i] : Vec3::Zero(), v1 = f.invMass[i + 1] > 0 ? f.vel[i + 1] : Vec3::Zero();
     drift += 0.5 * dt * dF.dot(v0 - v1);
   }
-  rep.energy = after - before + drift;
+  return after - before + drift;
 }
 
 }  // namespace woven

@@ -10,12 +10,15 @@
 // still take along the normal (the next step's flattening passes absorb that part). Velocities are
 // not changed. The energy the moves put in is returned for the books (EnergyBooks::projection):
 // the spring energy of the CPs whose nodes moved, and the change of the step's kinetic energy that
-// their changed forces make (dF . dx / 2 over the drift dx = dt v).
+// their changed forces make (dF . dx / 2 over the drift dx = dt v). The contacts are swept colour by
+// colour (law/RowColouring: a colour's contacts share no node, so they move at once on the threads),
+// the body contacts last, in order: the same bits on any thread count.
 #pragma once
 #include "fabric/Fabric.hpp"
 #include "geom/BodyContact.hpp"
 #include "geom/CPContact.hpp"
 #include "law/ContactParams.hpp"
+#include "law/RowColouring.hpp"
 #include <functional>
 #include <vector>
 
@@ -44,14 +47,23 @@ class PositionProjection {
   /// the mean overlap of 1 x, 10 x injected 5 times the energy).
   void project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
                std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop, Real maxMove,
-               SectionRule rule, Real dt, ProjectionReport& report);
+               SectionRule rule, Real dt, ProjectionReport& report, SweepOrder order = SweepOrder::Coloured);
 
  private:
+  /// Contacts of a colour below which it is projected on one thread.
+  static constexpr Index kContactGrain = 256;
+  Real bookedEnergy(Fabric& f, Real dt);  // the energy the moves put in [J] (see project)
   std::vector<Real> allowance_;       // per contact, measured once per call (NaN: not yet)
-  std::vector<std::uint8_t> marked_;  // per CP: its spring energy is counted
-  std::vector<Index> elems_;
-  std::vector<std::uint8_t> movedBefore_, movedNow_;  // per node: moved in the sweep before / in this one
+  struct Slot {
+    Index q, cpA, cpB, i, j;  // the contact, its CPs and their first nodes
+  };
+  std::vector<Slot> slots_;           // the contacts in colour order
+  std::vector<Real> outcome_;         // per slot: the overlap its contact's move in this sweep took out [m] (0: none)
+  RowColouring colouring_;            // of the contacts, by their four nodes
+  std::vector<Index> elems_;          // the CPs with a moved node, in order
+  std::vector<std::uint8_t> movedBefore_, movedNow_, movedAny_;  // per node: moved in the sweep before / in this one / at all
   std::vector<Real> travel_;                          // per node: distance moved in this call [m]
+  Vec3Array origin_;                                  // per moved node: its position before the projection
   Vec3Array forceBefore_;                             // per element of elems_: its spring force before the moves
 };
 

@@ -6,8 +6,10 @@
 #include "chain_util.hpp"
 #include "core/Parallel.hpp"
 #include "engine/FabricEngine.hpp"
+#include "law/RowColouring.hpp"
 #include "weave/WeaveBuilder.hpp"
 #include <gtest/gtest.h>
+#include <algorithm>
 #include <cstring>
 
 using namespace woven;
@@ -22,6 +24,9 @@ struct Outcome {
   EnergyBooks books;
   Vec3 bodyPos = Vec3::Zero(), bodyVel = Vec3::Zero();
   long contacts = 0, broken = 0;
+  std::vector<CPContact> contactList;  // the last step's contacts, for the colouring test
+  std::vector<BodyContact> bodyContactList;
+  long impulseRows = 0, projected = 0;
 };
 
 template <class T>
@@ -48,6 +53,8 @@ Outcome finish(FabricEngine& e) {
   o.pos = f.pos, o.vel = f.vel, o.dir = f.secDir, o.flat = f.secFlat, o.alive = f.alive;
   o.books = e.dynamics().energy();
   o.contacts = e.collisions()->stats.contacts;
+  o.contactList = e.collisions()->contacts(), o.bodyContactList = e.collisions()->bodyContacts();
+  o.impulseRows = e.collisions()->stats.impulses.rows, o.projected = e.collisions()->stats.projection.pushed;
   o.broken = e.dynamics().breakage().brokenElements();
   if (!e.collisions()->bodies.empty()) o.bodyPos = e.collisions()->bodies[0].pos, o.bodyVel = e.collisions()->bodies[0].vel;
   return o;
@@ -77,7 +84,8 @@ Outcome tension(int threads, int steps) {
 }
 
 // A 40 x 40-yarn ply (one CP per crossing, ~3200 CPs, every yarn end clamped, grid broad phase) and
-// a 3 mm, 1 g cube touching its middle at 1000 m/s; breakage at 1 % raw strain.
+// a 3 mm, 1 g cube touching its middle at 1000 m/s; breakage at 1 % raw strain; friction between
+// yarns and with the cube.
 Outcome ballistic(int threads, int steps) {
   setThreads(threads);
   WeaveParams p = km2_706();
@@ -86,6 +94,7 @@ Outcome ballistic(int threads, int steps) {
   FabricEngine e(buildWeave(p).fabric);
   ContactParams c;
   c.positionCorrection = 0, c.flattenPasses = 1, c.maxIterations = 10, c.skin = 1e-5;
+  c.friction = 0.1, c.bodyFriction = 0.2;  // friction's energy share is summed per row, then in row order
   e.enableCollisions(c, BroadPhase::Grid);
   for (const Yarn& y : e.fabric().yarns) e.dynamics().fix(y.firstNode), e.dynamics().fix(y.firstNode + y.nNodes - 1);
   BreakageParams b;
@@ -114,6 +123,83 @@ TEST(Threads, BallisticSceneWithBreakageIsTheSameBitsOnOneTwoAndThreeThreads) {
   EXPECT_GT(one.broken, 0) << "the cube breaks yarns within the run";
   EXPECT_GT(one.bodyVel.z(), -1000) << "the ply slows the cube";
   for (int t : {2, 3}) expectSame(one, ballistic(t, steps), t);
+}
+
+// The impulse rows and the projection's contacts are swept colour by colour (law/RowColouring),
+// each colour on the threads: the colouring of the struck ply's last contact set (the rows of the
+// gap model: one per listed contact, then the body's) must be a colouring (no two rows of a colour
+// share a node, every row once, the body rows in the serial tail), greedy (a row of colour c meets,
+// for each lower colour, an earlier row of that colour at one of its nodes), and large enough that
+// the same-bits test above splits colours over the threads.
+TEST(Threads, RowsOfAColourShareNoNodeOnAStruckPly) {
+  const Outcome o = ballistic(1, static_cast<int>(runLength(300, 3)));
+  const std::vector<CPContact>& cs = o.contactList;
+  const Index nRows = static_cast<Index>(cs.size() + o.bodyContactList.size());
+  const Index nNodes = static_cast<Index>(o.pos.size());
+  ASSERT_GT(o.bodyContactList.size(), 0u) << "the cube touches the ply";
+  ASSERT_GT(cs.size(), 1000u);
+  // The rows' nodes as ImpulseLaw lays them out: the two nodes of each CP.
+  WeaveParams p = km2_706();
+  p.nx = p.ny = 20;
+  p.cpPerSpan = 1;
+  const Fabric f = buildWeave(p).fabric;
+  ASSERT_EQ(f.nNodes(), nNodes);
+  const auto rowNodes = [&](Index r, Index* node) {
+    if (r >= static_cast<Index>(cs.size())) return -1;
+    node[0] = f.elem0[cs[r].cpA], node[1] = node[0] + 1, node[2] = f.elem0[cs[r].cpB], node[3] = node[2] + 1;
+    return 4;
+  };
+  RowColouring col;
+  col.build(nRows, nNodes, rowNodes);
+  // Every row once, in colour order, each colour's rows in row order.
+  std::vector<int> seen(static_cast<std::size_t>(nRows), 0);
+  ASSERT_EQ(static_cast<Index>(col.order().size()), nRows);
+  for (int c = 0; c <= RowColouring::kColours; ++c)
+    for (Index k = col.begin(c); k < col.begin(c + 1); ++k) {
+      const Index r = col.order()[k];
+      ++seen[r];
+      EXPECT_EQ(col.colour(r), c);
+      if (k > col.begin(c)) {
+        EXPECT_LT(col.order()[k - 1], r);
+      }
+    }
+  for (Index r = 0; r < nRows; ++r) EXPECT_EQ(seen[r], 1) << "row " << r;
+  for (Index r = static_cast<Index>(cs.size()); r < nRows; ++r) EXPECT_EQ(col.colour(r), RowColouring::kColours);
+  // No node twice in a colour; per node, its rows (in row order) with their colours.
+  std::vector<std::vector<std::pair<Index, int>>> rowsAt(static_cast<std::size_t>(nNodes));
+  Index largest = 0;
+  for (int c = 0; c < col.colours(); ++c) {
+    std::vector<std::uint8_t> used(static_cast<std::size_t>(nNodes), 0);
+    largest = std::max(largest, col.begin(c + 1) - col.begin(c));
+    for (Index k = col.begin(c); k < col.begin(c + 1); ++k) {
+      Index node[4];
+      const int n = rowNodes(col.order()[k], node);
+      for (int q = 0; q < n; ++q) EXPECT_FALSE(used[node[q]]) << "colour " << c << ": node " << node[q] << " in two rows";
+      for (int q = 0; q < n; ++q) used[node[q]] = 1;
+    }
+  }
+  for (Index r = 0; r < static_cast<Index>(cs.size()); ++r) {
+    Index node[4];
+    rowNodes(r, node);
+    for (int q = 0; q < 4; ++q) rowsAt[node[q]].push_back({r, col.colour(r)});
+  }
+  long tail = 0;
+  for (Index r = 0; r < static_cast<Index>(cs.size()); ++r) {
+    const int c = col.colour(r);
+    tail += c == RowColouring::kColours;
+    Index node[4];
+    rowNodes(r, node);
+    for (int lower = 0; lower < std::min(c, RowColouring::kColours); ++lower) {
+      bool met = false;
+      for (int q = 0; q < 4 && !met; ++q)
+        for (const auto& [other, oc] : rowsAt[node[q]]) met = met || (other < r && oc == lower);
+      EXPECT_TRUE(met) << "row " << r << " of colour " << c << " could have taken colour " << lower;
+    }
+  }
+  EXPECT_EQ(tail, 0) << "every yarn row found a colour";
+  EXPECT_GE(largest, 2 * ImpulseLaw::kRowGrain) << "a colour large enough to be split over the threads";
+  EXPECT_GE(col.colours(), 2);
+  EXPECT_GT(o.impulseRows, 0);
 }
 
 // The collision stage's own count (ContactParams::threads >= 1) overrides woven's for its loops only
