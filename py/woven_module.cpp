@@ -562,7 +562,7 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("response") = "impulse", bp::arg("penalty_stiffness") = 1e5, bp::arg("penalty_damping") = 0.0,
             bp::arg("flattening") = "geometric", bp::arg("section_stiffness") = 1e4, bp::arg("contact_model") = "gap",
             bp::arg("projection_sweeps") = -1, bp::arg("projection_slop") = 0.5e-6, bp::arg("projection_max_move") = 10e-6,
-            bp::arg("sweep_order") = "coloured"),
+            bp::arg("sweep_order") = "sequential"),
            "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction (yarn-yarn) and body_friction "
            "(rigid body-yarn) in [0, 2], 0 with response 'penalty', mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
@@ -573,8 +573,8 @@ BOOST_PYTHON_MODULE(_woven) {
            "penalty_damping zeta in [0, 1), flattening 'geometric', 'none' or 'springs', section_stiffness k_s [N/m] > 0 "
            "(docs/collisions.md), contact_model 'gap' (gap functions, exact gradient rows, position projection) or "
            "'paper' (Sections 4-5), projection_sweeps in [0, 50] or -1 (auto: 8 with 'gap' and 'impulse', else 0), "
-           "projection_slop [m] in [0, 1e-3], projection_max_move [m] in (0, 1e-3], sweep_order 'coloured' (rows of a "
-           "colour on the threads) or 'sequential' (contact order). See woven.contact.")
+           "projection_slop [m] in [0, 1e-3], projection_max_move [m] in (0, 1e-3], sweep_order 'sequential' (contact order; the default) "
+           "or 'coloured' (rows of a colour on the threads). See woven.contact.")
       .def("disable_collisions", +[](FabricEngine& e) { e.disableCollisions(); })
       .add_property("collisions_enabled", +[](FabricEngine& e) { return e.collisions() != nullptr; })
       .def("settle_sections", +[](FabricEngine& e, int passes) { return stageOf(e).settle(e.fabric(), passes); },

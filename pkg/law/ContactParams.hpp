@@ -30,10 +30,10 @@ enum class ContactModel : std::uint8_t {
 /// Row order of the Gauss-Seidel sweeps (impulse rows and position projection; law/RowColouring).
 enum class SweepOrder : std::uint8_t {
   /// Colour by colour (rows of a colour share no node, solved at once on the threads), the rows on
-  /// a rigid body last: the default, the order that lets the sweeps use the threads.
+  /// a rigid body last: the order that lets the sweeps use the threads.
   Coloured = 0,
-  /// One row after another in contact order, the body rows last (the order before the colouring):
-  /// serial, for comparison.
+  /// One row after another in contact order, the body rows last: serial, the default (no two-thread
+  /// gain of the coloured order measured yet, and 5-15 % slower on one thread; docs/design.md).
   Sequential = 1
 };
 /// "coloured" or "sequential"; throws ParameterError("sweep_order") otherwise.
@@ -100,7 +100,7 @@ struct ContactParams {
   /// count. Any count gives the same contacts and the same state, bit for bit (core/Parallel.hpp).
   int threads = 0;
   /// Row order of the impulse and projection sweeps. Every thread count gives the same bits in either.
-  SweepOrder sweepOrder = SweepOrder::Coloured;
+  SweepOrder sweepOrder = SweepOrder::Sequential;
 
   Response response = Response::Impulse;
   /// Penalty stiffness k_p [N/m] > 0 (response Penalty): F = k_p delta on a contact overlapping by

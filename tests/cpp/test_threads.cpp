@@ -69,7 +69,9 @@ Outcome tension(int threads, int steps) {
   p.nx = p.ny = 12;
   p.warpMaterial.dampingRatio = p.weftMaterial.dampingRatio = 0.1;
   FabricEngine e(buildWeave(p).fabric);
-  e.enableCollisions(ContactParams());
+  ContactParams c;
+  c.sweepOrder = SweepOrder::Coloured;  // the order whose sweeps run on the threads
+  e.enableCollisions(c);
   e.collisions()->settle(e.fabric());
   for (const Yarn& y : e.fabric().yarns)
     if (y.family == YarnFamily::Warp) {
@@ -95,6 +97,7 @@ Outcome ballistic(int threads, int steps) {
   ContactParams c;
   c.positionCorrection = 0, c.flattenPasses = 1, c.maxIterations = 10, c.skin = 1e-5;
   c.friction = 0.1, c.bodyFriction = 0.2;  // friction's energy share is summed per row, then in row order
+  c.sweepOrder = SweepOrder::Coloured;      // the order whose sweeps run on the threads
   e.enableCollisions(c, BroadPhase::Grid);
   for (const Yarn& y : e.fabric().yarns) e.dynamics().fix(y.firstNode), e.dynamics().fix(y.firstNode + y.nNodes - 1);
   BreakageParams b;
