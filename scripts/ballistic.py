@@ -91,7 +91,7 @@ defaults.update({
     'seed': (1, '', 'seed of the Weibull draw'),
     'safety': (0.7, '', 'O.dt = safety * dt_crit'),
     'energy_guard': (0.005, '', 'energy-balance error past which O.dt drops to guard_safety * dt_crit for the rest of the run, in [0, energy_limit) (0: off; woven.energy_guard)'),
-    'guard_safety': (0.35, '', 'O.dt = guard_safety * dt_crit once the guard acts, in (0, safety]'),
+    'guard_safety': (0.0, '', 'O.dt = guard_safety * dt_crit once the guard acts, in (0, safety] (0: safety / 2, 0.35 by default)'),
     'samples': (400, '', 'rows of the time series at most'),
     'vtk_every': (0, '', 'write VTK frames every this many steps (0: first and last frame only; -1: none)'),
     'vtk_rings': (8, '', 'points per section ellipse in the VTK tubes'),
@@ -166,8 +166,8 @@ if not (0 < p.safety <= 1):
     bad('safety', '(0, 1]')
 if not (0 <= p.energy_guard < p.energy_limit):
     bad('energy_guard', '[0, energy_limit = %g) (0: off)' % p.energy_limit)
-if not (0 < p.guard_safety <= p.safety):
-    bad('guard_safety', '(0, safety = %g]' % p.safety)
+if not (0 <= p.guard_safety <= p.safety):
+    bad('guard_safety', '(0, safety = %g], or 0: safety / 2' % p.safety)
 if p.samples < 10:
     bad('samples', '[10, inf)')
 if not (0 < p.energy_limit < 1):
@@ -228,7 +228,7 @@ if p.shape in ('box', 'sphere') and p.yaw == 0 and p.obliquity == 0:
 O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
 woven.attach(eng, set_dt=True, safety=p.safety)
 every = max(1, int(math.ceil(p.t_end / O.dt)) // p.samples)
-guard = EnergyGuard(eng, p.energy_guard, p.guard_safety)
+guard = EnergyGuard(eng, p.energy_guard, p.guard_safety or 0.5 * p.safety)
 steps_max = int(math.ceil(p.t_end / guard.smallest_dt()))  # the run stops at t_end (watch)
 KE0 = 0.5 * mass * p.V ** 2
 E0 = eng.energy()
