@@ -51,7 +51,9 @@ def test_no_perforation_is_reported_clearly(tmp_path):
 
 @pytest.mark.parametrize('args,key', [(['mass=0'], 'mass'), (['mass=-1'], 'mass'), (['V=nan'], 'V'),
                                       (['V=inf'], 'V'), (['shape=cone'], 'shape'), (['standoff=-1e-3'], 'standoff'),
-                                      (['clamp=3'], 'clamp')])
+                                      (['clamp=3'], 'clamp'), (['energy_guard=0.01'], 'energy_guard'),
+                                      (['energy_guard=-1'], 'energy_guard'), (['guard_safety=0.8'], 'guard_safety'),
+                                      (['backface_strain=-1e-4'], 'backface_strain')])
 def test_bad_input_names_the_key(tmp_path, args, key):
     rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', *args)
     assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log
@@ -198,3 +200,25 @@ def test_bench_adaptive_quick(tmp_path):
     assert m['adaptive']['cps'] < m['uniform']['cps'] and m['adaptive']['dt'] == m['uniform']['dt']
     assert m['speedup'] == pytest.approx(m['uniform']['wall_seconds'] / m['adaptive']['wall_seconds'])
     assert set(s['checks']) == {'speedup', 'residual_velocity', 'perforated'}
+
+
+def test_energy_guard_refines_the_step_once_past_its_limit(yade_ns):
+    # woven.energy_guard against its contract: below the limit O.dt is untouched; past it (either
+    # sign) O.dt becomes safety * dt_crit once, and the factor it shrank by is returned; later calls
+    # change nothing.
+    import woven
+    from woven.energy_guard import EnergyGuard
+    from yade.wrapper import Omega
+    O = Omega()
+    w = woven.weave(preset='km2_706', nx=1, ny=1, cp_per_span=1)
+    O.dt = 0.7 * w.engine.dt_crit
+    g = EnergyGuard(w.engine, 0.005, 0.35)
+    assert g.smallest_dt() == pytest.approx(0.35 * w.engine.dt_crit, rel=1e-15)
+    assert g.check(0.004) == 1.0 and O.dt == 0.7 * w.engine.dt_crit and g.refined_at is None
+    assert g.check(-0.006) == pytest.approx(2.0, rel=1e-12)
+    assert O.dt == pytest.approx(0.35 * w.engine.dt_crit, rel=1e-15)
+    assert g.check(0.5) == 1.0 and g.summary()['dt_before'] == pytest.approx(0.7 * w.engine.dt_crit)
+    off = EnergyGuard(w.engine, 0.0, 0.35)
+    assert off.check(0.9) == 1.0 and off.smallest_dt() == O.dt
+    with pytest.raises(ValueError, match='guard_safety'):
+        EnergyGuard(w.engine, 0.005, 0.0)
