@@ -90,7 +90,8 @@ if p.methods:
     METHODS = {m: METHODS[m] for m in METHODS if m in chosen}
 DT_KEY = {'yade_grid': 'dt_factor'}  # the others: 'safety' (fraction of the chain's dt_crit)
 SCENE = {'side': side, 't_end': t_end, 'V': p.V, 'shape': p.shape, 'size': p.size, 'mass': p.mass,
-         'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 50, 'energy_limit': 0.99, 'overlap_limit': 100}
+         'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 50, 'energy_limit': 0.99, 'overlap_limit': 100,
+         'pictures': 0, 'backface': 0}  # the method's time, not the pictures' frames and back-face measures
 if p.quick:
     RES, DTS, REF_RES = [1, 2, 4], [0.7], 4
     STIFF_KEEP = {'penalty': [1e6], 'section_springs': [1e4], 'yade_grid': [1e6, 1e7]}
@@ -365,7 +366,7 @@ if p.map:
                'yade_grid': [1e5, 1e6, 1e7, 1e8, 1e9]}
     MSCENE = {'side': 0.00635, 't_end': 8e-6, 'shape': 'sphere', 'size': 1.5e-3, 'mass': 0.05e-3,
               'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 20, 'cp_per_span': 1, 'energy_limit': 0.99,
-              'overlap_limit': 100}
+              'overlap_limit': 100, 'pictures': 0, 'backface': 0}
     jobs = []
     for method, (extra, kkey, _) in METHODS.items():
         for k in (M_K.get(method, [None]) if kkey else [None]):
