@@ -235,13 +235,6 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         continue;
       }
       if (caching) cache_[k].valid = false;
-      // The bounds lie inside the boxes grown by the step's motion: where those do not meet, the
-      // pair neither touches nor meets within the step (a yes/no SAT with early out, cheaper than
-      // the static test's depth and far cheaper than the moving test's four sweeps).
-      if (!obbOverlap(grown_[pr.a], grown_[pr.b])) {
-        if (gapModel) memo_[k].memoPoints = 0;  // the sections may turn unseen while apart: measure forgotten
-        continue;
-      }
       if (gapModel) {
         PairMemo& pc = memo_[k];
         // The pair's gap functions; listed when they can close within the step (speculative
@@ -251,9 +244,14 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
                            dt * (std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm())) +
                                  std::sqrt(std::max(f.vel[j].squaredNorm(), f.vel[j + 1].squaredNorm())));
         // No section reaches beyond its major semi-axis: pairs whose axes are farther apart than
-        // that cannot be listed (most pairs of a broad phase with a skin), and need no sections.
+        // that cannot be listed (most pairs of a broad phase with a skin), and need no sections;
+        // nor can pairs whose boxes grown by the step's motion do not meet. A pair that fails either
+        // is not measured, and its measure is forgotten (the sections may turn unseen while apart).
+        // The segments first: a few dot products, where the boxes' separating-axis test took 13 % of
+        // the default impact.
         const Real widest = std::max(std::max(widest_[i], widest_[i + 1]), std::max(widest_[j], widest_[j + 1]));
-        if (closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]).distance > 2 * widest + reach) {
+        if (closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]).distance > 2 * widest + reach ||
+            !obbOverlap(grown_[pr.a], grown_[pr.b])) {
           pc.memoPoints = 0;
           continue;
         }
@@ -294,6 +292,10 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
           if (two[q].gap <= reach) out.push_back(two[q]);
         continue;
       }
+      // The bounds lie inside the boxes grown by the step's motion: where those do not meet, the
+      // pair neither touches nor meets within the step (a yes/no SAT with early out, cheaper than
+      // the static test's depth and far cheaper than the moving test's four sweeps).
+      if (!obbOverlap(grown_[pr.a], grown_[pr.b])) continue;
       if (cpContactStatic(f, bounds_, pr.a, pr.b, params_.margin, params_.rule, c)) {
         out.push_back(c);
         if (caching) {
