@@ -5,9 +5,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SUDO=""; [ "$(id -u)" = 0 ] || SUDO=sudo
-# python3-distributed: the Dask backend of scripts/campaign.py (V50 campaigns on a cluster).
+# python3-distributed: the Dask backend of scripts/campaign.py (V50 campaigns on a cluster); xvfb: the
+# X server in memory that ballistic.py's pictures render under when there is no display.
 PKGS="yade cmake make g++ libeigen3-dev libboost-python1.74-dev python3-dev python3-numpy python3-matplotlib
-      python3-pytest libgtest-dev googletest libode-dev python3-vtk9 python3-distributed"
+      python3-pytest libgtest-dev googletest libode-dev python3-vtk9 python3-distributed xvfb"
 missing=$(for p in $PKGS; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || echo "$p"; done)
 if [ -n "$missing" ]; then
   echo "setup: installing $missing"
