@@ -22,8 +22,7 @@ def write_frame(engine, directory, stem, rings=8):
     import vtk
     from vtk.util import numpy_support as ns
     from . import arrays
-    from .output import atomic_path
-    from .vtk_output import body_surfaces, yarn_tubes
+    from .vtk_output import body_surfaces, write_polydata, yarn_tubes
     os.makedirs(directory, exist_ok=True)
     e0 = np.frombuffer(engine._element_first_nodes(), dtype=np.int32)
     broken = np.nonzero(arrays.alive(engine) == 0)[0]
@@ -36,14 +35,7 @@ def write_frame(engine, directory, stem, rings=8):
     paths = []
     for part, poly in (('yarns', yarn_tubes(engine, rings)), ('bodies', body_surfaces(engine)), ('ends', ends)):
         path = os.path.join(directory, '%s_%s.vtp' % (stem, part))
-        with atomic_path(path) as tmp:
-            w = vtk.vtkXMLPolyDataWriter()
-            w.SetFileName(tmp)
-            w.SetInputData(poly)
-            w.SetDataModeToAppended()
-            w.SetCompressorTypeToZLib()
-            if not w.Write():
-                raise IOError('VTK could not write %s' % path)
+        write_polydata(poly, path)
         paths.append(path)
     return paths
 

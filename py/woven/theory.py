@@ -27,6 +27,20 @@ def _array(name, x, lo, hi, unit):
     return a
 
 
+def _strain_at(speed, V, name):
+    """The strain e in (0, 1) at which the increasing `speed(e)` [m/s] equals V, by bisection."""
+    lo, hi = 0.0, 1.0
+    if speed(hi) < V:
+        raise ValueError('%s: V = %g m/s exceeds the model range (strain > 100 %%)' % (name, V))
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if speed(mid) < V:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
 def smith(V, E, rho):
     """Smith's transverse impact of a yarn at speed V [m/s] (Smith, McCrackin & Schiefer 1958).
 
@@ -41,16 +55,7 @@ def smith(V, E, rho):
     def speed(e):
         return c * math.sqrt(max(2 * e * math.sqrt(e * (1 + e)) - e * e, 0.0))
 
-    lo, hi = 0.0, 1.0
-    if speed(hi) < V:
-        raise ValueError('smith: V = %g m/s exceeds the model range (strain > 100 %%)' % V)
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if speed(mid) < V:
-            lo = mid
-        else:
-            hi = mid
-    e = 0.5 * (lo + hi)
+    e = _strain_at(speed, V, 'smith')
     return {'c': c, 'strain': e, 'w': c * e, 'U_L': c * math.sqrt(e / (1 + e)),
             'U_E': c * (math.sqrt(e * (1 + e)) - e)}
 
@@ -78,16 +83,7 @@ def smith_fabric(V, E, rho, mass_ratio=2.0):
     def speed(e):
         return math.sqrt(max(2 * c * e * kink(e) * (1 + e) - (c * e) ** 2, 0.0))
 
-    lo, hi = 0.0, 1.0
-    if speed(hi) < V:
-        raise ValueError('smith_fabric: V = %g m/s exceeds the model range (strain > 100 %%)' % V)
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if speed(mid) < V:
-            lo = mid
-        else:
-            hi = mid
-    e = 0.5 * (lo + hi)
+    e = _strain_at(speed, V, 'smith_fabric')
     return {'c': c, 'strain': e, 'w': c * e, 'U_L': kink(e), 'U_E': kink(e) * (1 + e) - c * e}
 
 

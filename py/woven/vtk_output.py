@@ -26,6 +26,19 @@ def _vtk():
         raise ImportError('VTK output needs the VTK library: apt-get install python3-vtk9') from ex
 
 
+def write_polydata(poly, path):
+    """Writes vtkPolyData `poly` to `path` (.vtp, appended, zlib), atomically."""
+    vtk, _ = _vtk()
+    with atomic_path(path) as tmp:
+        w = vtk.vtkXMLPolyDataWriter()
+        w.SetFileName(tmp)
+        w.SetInputData(poly)
+        w.SetDataModeToAppended()
+        w.SetCompressorTypeToZLib()
+        if not w.Write():
+            raise IOError('VTK could not write %s' % path)
+
+
 def yarn_tubes(engine, rings=8):
     """vtkPolyData of the yarns as elliptic tubes (see the module doc)."""
     vtk, ns = _vtk()
@@ -127,19 +140,11 @@ class Recorder:
         self.frames = []
 
     def write(self, time):
-        vtk, _ = _vtk()
         i = len(self.frames)
         names = []
         for stem, poly in (('yarns', yarn_tubes(self.engine, self.rings)), ('bodies', body_surfaces(self.engine))):
             name = '%s_%05d.vtp' % (stem, i)
-            with atomic_path(os.path.join(self.dir, name)) as tmp:
-                w = vtk.vtkXMLPolyDataWriter()
-                w.SetFileName(tmp)
-                w.SetInputData(poly)
-                w.SetDataModeToAppended()
-                w.SetCompressorTypeToZLib()
-                if not w.Write():
-                    raise IOError('VTK could not write %s' % os.path.join(self.dir, name))
+            write_polydata(poly, os.path.join(self.dir, name))
             names.append(name)
         self.frames.append((time, names))
         self.close()
