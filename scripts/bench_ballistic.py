@@ -50,7 +50,7 @@ if p.threads > 1 and woven.openmp_threads() < p.threads:
 weave_args = {'preset': 'km2_706', 'nx': 0, 'ny': 0, 'cp_per_span': p.cp_per_span}
 # The scene's contact settings (scripts/ballistic.py)
 contact_args = {k: v[0] for k, v in CONTACT_KEYS.items()}
-contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=10, skin=1e-5, broad_phase=p.broad_phase)
+contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=10, skin=4e-5, broad_phase=p.broad_phase)
 if p.threads > 1:  # both coupled runs in the order whose sweeps use the threads (docs/design.md, Threads)
     contact_args['sweep_order'] = 'coloured'
 if p.plies > 1:  # the scene's sweeps for a pack (scripts/ballistic.py)

@@ -15,7 +15,7 @@ inline std::uint64_t slotOf(std::int64_t x, std::int64_t y, std::int64_t z, std:
 }  // namespace
 
 void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const PairFilter& filter,
-                           std::vector<CPPair>& pairs) {
+                           std::vector<CPPair>& pairs, const std::vector<std::uint8_t>* dirty) {
   pairs.clear();
   const Index n = static_cast<Index>(boxes.size());
   lo_.resize(n), hi_.resize(n);
@@ -62,7 +62,10 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
     }
 
   // Each CP with the later CPs of its cells: fixed chunks of CPs (threads), each listing its pairs in
-  // CP order, joined in chunk order (the same list at any thread count).
+  // CP order, joined in chunk order (the same list at any thread count). With `dirty`, each flagged
+  // CP with every CP of its cells, a flagged pair once (from its lower CP): a pair (j, i) with j < i
+  // is then listed from i, and the list is sorted at the end.
+  const auto flagged = [dirty](Index i) { return !dirty || (*dirty)[i]; };
   constexpr Index kChunk = 1024;
   const Index chunks = chunkCount(n, kChunk);
   chunkPairs_.resize(chunks);
@@ -72,13 +75,14 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
     out.clear();
     std::vector<Index> mine;
     for (Index i = t * kChunk, end = std::min(n, i + kChunk); i < end; ++i) {
+      if (!flagged(i)) continue;
       mine.clear();
       for (Index k = cellBegin_[i]; k < cellBegin_[i + 1]; ++k) {
         const Cell& c = cellOf_[k];
         const std::uint64_t s = slotOf(c.x, c.y, c.z, mask);
         for (std::uint32_t at = slotCount_[s]; at < slotCount_[s + 1]; ++at) {
           const Index j = slotItem_[at];
-          if (j <= i) continue;
+          if (j == i || (j < i && flagged(j))) continue;
           const Cell& cj = cellOf_[slotCell_[at]];
           if (cj.x != c.x || cj.y != c.y || cj.z != c.z) continue;  // another cell in the same slot
           if ((hi_[i].array() < lo_[j].array()).any() || (hi_[j].array() < lo_[i].array()).any()) continue;
@@ -88,19 +92,21 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
               static_cast<std::int64_t>(std::floor(corner.y() * ih)) != c.y ||
               static_cast<std::int64_t>(std::floor(corner.z() * ih)) != c.z)
             continue;
-          if (filter.excluded(f, i, j)) continue;
+          const Index lo = std::min(i, j), hi = std::max(i, j);  // the full phase's argument order
+          if (filter.excluded(f, lo, hi)) continue;
           ++chunkTests_[t];
-          if (obbOverlap(boxes[i], boxes[j])) mine.push_back(j);
+          if (obbOverlap(boxes[lo], boxes[hi])) mine.push_back(j);
         }
       }
       std::sort(mine.begin(), mine.end());
-      for (Index j : mine) out.push_back({i, j});
+      for (Index j : mine) out.push_back({std::min(i, j), std::max(i, j)});
     }
   });
   for (Index t = 0; t < chunks; ++t) {
     pairs.insert(pairs.end(), chunkPairs_[t].begin(), chunkPairs_[t].end());
     overlapTests += chunkTests_[t];
   }
+  if (dirty) std::sort(pairs.begin(), pairs.end());
 }
 
 }  // namespace woven

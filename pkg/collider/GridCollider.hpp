@@ -16,8 +16,11 @@ namespace woven {
 
 class GridCollider {
  public:
-  /// Sorted candidate pairs of CPs whose `boxes` overlap into `pairs`.
-  void collide(const Fabric& f, const std::vector<OBB>& boxes, const PairFilter& filter, std::vector<CPPair>& pairs);
+  /// Sorted candidate pairs of CPs whose `boxes` overlap into `pairs`. With `dirty` (one flag per
+  /// CP), only the pairs that involve a flagged CP are listed: the cells hold every CP, and only the
+  /// flagged ones look in theirs.
+  void collide(const Fabric& f, const std::vector<OBB>& boxes, const PairFilter& filter, std::vector<CPPair>& pairs,
+               const std::vector<std::uint8_t>* dirty = nullptr);
   long overlapTests = 0;  ///< OBB tests after the AABB test
   Real cellSize = 0;      ///< of the last call [m]
 

@@ -52,7 +52,7 @@ struct CollisionStats {
   // since the start
   long steps = 0;
   long broadPhases = 0;       ///< broad phases run (the other steps reused the pairs: Verlet skin)
-  long partialBroadPhases = 0;  ///< of which only for the yarns that left their skin (OBB tree)
+  long partialBroadPhases = 0;  ///< of which only for the CPs (grid) or yarns (OBB tree) that left their skin
   Real maxPenetration = 0;    ///< [m]
   /// Sums over the steps of the overlaps of the contacts overlapping after flattening and of their
   /// count [m, -], for the mean over contacts and time (yarn-yarn; bodies below).

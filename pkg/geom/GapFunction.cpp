@@ -54,9 +54,8 @@ void orientNormal(const Vec3& d, const Vec3* orient, bool interior, const Vec3& 
 // chord's own direction is taken where the interpolated tangent leaves it by more than
 // kKinkFullDeg, blended from kKinkYarnDeg: the yarn's tangent where the chain is smooth, the CP's
 // straight axis where it is not.
-Vec3 yarnTangent(const Fabric& f, Index e, Real s, const Vec3Array* tangent) {
+Vec3 yarnTangent(const Fabric& f, Index e, Real s, const Vec3Array* tangent, const Vec3& chord) {
   const Index i = f.elem0[e];
-  const Vec3 chord = (f.pos[i + 1] - f.pos[i]).normalized();
   Vec3 t = tangent ? Vec3((1 - s) * (*tangent)[i] + s * (*tangent)[i + 1])
                    : Vec3((1 - s) * yarnTangentAt(f, i) + s * yarnTangentAt(f, i + 1));
   const Real len = t.norm();
@@ -69,6 +68,10 @@ Vec3 yarnTangent(const Fabric& f, Index e, Real s, const Vec3Array* tangent) {
   if (c <= cFull) return chord;
   const Real mu = (c - cFull) / (cYarn - cFull);  // 1 at kKinkYarnDeg, 0 at kKinkFullDeg
   return (mu * t + (1 - mu) * chord).normalized();
+}
+Vec3 yarnTangent(const Fabric& f, Index e, Real s, const Vec3Array* tangent) {
+  const Index i = f.elem0[e];
+  return yarnTangent(f, e, s, tangent, (f.pos[i + 1] - f.pos[i]).normalized());
 }
 
 // Direction the sections' supports are measured along. The chords' common normal n leans by the
@@ -105,7 +108,7 @@ Real thicknessWeight(const Vec3& tA, const Vec3& tB) {
 // The section of CP e at s in the yarn's own plane (normal to yarnTangent), for the supports.
 SectionAt yarnSection(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3Array* tangent) {
   SectionAt q = sectionAt(f, e, s, rule);
-  const Vec3 t = yarnTangent(f, e, s, tangent);
+  const Vec3 t = yarnTangent(f, e, s, tangent, q.t);  // q.t: the chord's direction
   Vec3 d = q.d - q.d.dot(t) * t;
   q.t = t;
   q.d = d.norm() > 1e-9 ? Vec3(d.normalized()) : t.unitOrthogonal();
@@ -172,7 +175,7 @@ bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide) {
 }
 
 int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, const Vec3* orient, CPContact out[2],
-             const Vec3Array* tangent) {
+             const Vec3Array* tangent, const SegmentClosest* closest) {
   const Index i = f.elem0[a], j = f.elem0[b];
   if (side) {
     // The part of A alongside B: B's ends projected on A's axis, clipped to A.
@@ -219,7 +222,7 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
       const Vec3 v1 = out[1].normal * (out[1].gap + out[1].hA + out[1].hB);
       const Vec3 dv = v1 - v0;
       if (v0.dot(dv) < 0 && v1.dot(dv) > 0) {
-        const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
+        const SegmentClosest sc = closest ? *closest : closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
         const Real r0 = v0.norm(), r1 = v1.norm();
         if (sc.s > lo && sc.s < hi && sc.distance < std::min(r0, r1) - kSideSkew) {
           const int q = r0 <= r1 ? 1 : 0;
@@ -233,7 +236,7 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
   // Crossing pieces: the closest points of the axes. Parallel ones that do not lie alongside (end
   // to end) keep the side-by-side measure at their closest points, so that the gap does not jump
   // from the half-thickness to the width when they slide alongside.
-  const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
+  const SegmentClosest sc = closest ? *closest : closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
   fillPair(f, a, b, sc.s, sc.t, side ? ContactKind::Side : ContactKind::Cross, rule, orient, true, tangent, out[0]);
   return 1;
 }

@@ -53,6 +53,7 @@
 #include "fabric/Fabric.hpp"
 #include "geom/BodyContact.hpp"
 #include "geom/CPContact.hpp"
+#include "geom/SegmentDistance.hpp"
 #include "shape/RigidBody.hpp"
 #include "shape/Section.hpp"
 
@@ -77,9 +78,11 @@ bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide);
 /// gap (sections measured now), sA/sB, point, kind, hA/hB. `orient` (may be null) points to the
 /// pair's two remembered normals, one per point (a side-by-side pair's points lie at the two ends
 /// of the shared part, where skew axes can have opposite normals; one point reads orient[0]). `tangent` (may be null: computed) holds every node's yarn tangent
-/// (bound/CPBound's yarnTangentAt, as the stage's refit leaves them). Returns the count.
+/// (bound/CPBound's yarnTangentAt, as the stage's refit leaves them). `closest` (may be null:
+/// computed) holds the axes' closest points, closestSegmentSegment of the pair's four nodes, where
+/// the caller has them. Returns the count.
 int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, const Vec3* orient, CPContact out[2],
-             const Vec3Array* tangent = nullptr);
+             const Vec3Array* tangent = nullptr, const SegmentClosest* closest = nullptr);
 
 /// The measure memory: the sections' measure hA + hB of a CP pair may grow between steps only into
 /// room that is there (up to the axes' distance r), never into an overlap: it is capped at

@@ -123,6 +123,20 @@ TEST(Collider, TreeSweepAndPruneGridAndBruteForceGiveTheSamePairs) {
     EXPECT_EQ(tree, brute) << "trial " << trial;
     EXPECT_EQ(sap, brute) << "trial " << trial;
     EXPECT_EQ(grid, brute) << "trial " << trial;
+    // The grid's partial phase (CollisionStage::broad: only the CPs out of their skin boxes look):
+    // exactly the brute-force pairs with a flagged CP, a few flagged or most.
+    for (const Real share : {0.05, 0.7}) {
+      std::vector<std::uint8_t> dirty(f.nElems());
+      std::bernoulli_distribution B(share);
+      for (auto& d : dirty) d = B(rng);
+      std::vector<CPPair> part, expect;
+      GridCollider g;
+      g.collide(f, b, filter, part, &dirty);
+      for (const CPPair& q : brute)
+        if (dirty[q.a] || dirty[q.b]) expect.push_back(q);
+      ASSERT_GT(expect.size(), 5u) << "trial " << trial;
+      EXPECT_EQ(part, expect) << "trial " << trial << " share " << share;
+    }
   }
   EXPECT_GT(cs.tree.stats.rebuiltNodes, rebuiltFirst);  // the bent yarns degraded some nodes
 }
