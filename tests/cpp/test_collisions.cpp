@@ -141,6 +141,38 @@ TEST(Collider, TreeSweepAndPruneGridAndBruteForceGiveTheSamePairs) {
   EXPECT_GT(cs.tree.stats.rebuiltNodes, rebuiltFirst);  // the bent yarns degraded some nodes
 }
 
+// A pair the broad phase keeps listing (a skin of 2 mm) while the narrow phase stops measuring it
+// (its axes 1 mm apart) must come back as a new pair: here it comes back from the other side, and
+// the remembered normal of the first contact would read that as the axes passed through each other
+// (an overlap of twice the yarn's thickness). Oracle: the crossing's gap from its axes' distance,
+// and the same stage started afresh on the last positions.
+TEST(CollisionStage, APairNoLongerMeasuredForgetsItsMemoryWhileStillListed) {
+  const Real r = 1e-4, l0 = 1e-3, gap = 1e-6, z = 2 * r + gap;
+  const auto run = [&](const std::vector<Real>& heights) {
+    Fabric f;
+    f.addYarn(line(0, 0, 1, l0), km2Material(), roundSection(r));
+    f.addYarn(line(M_PI / 2, heights[0], 1, l0), km2Material(), roundSection(r));
+    FabricEngine e(std::move(f));
+    ContactParams c;
+    c.skin = 2e-3;
+    e.enableCollisions(c, BroadPhase::Grid);
+    for (Index k = 0; k < 4; ++k) e.dynamics().fix(k);
+    std::vector<Real> gaps;
+    for (Real h : heights) {
+      for (Index k : {2, 3}) e.fabric().pos[k].z() = h;
+      e.step(1e-8);
+      gaps.push_back(e.collisions()->contacts().empty() ? INFINITY : e.collisions()->contacts()[0].gap);
+      EXPECT_EQ(e.collisions()->stats.broadPhases, 1) << "the pair stays listed";
+    }
+    return gaps;
+  };
+  const std::vector<Real> listed = run({z, z + 1e-3, -z}), fresh = run({-z});
+  EXPECT_NEAR(listed[0], gap, 1e-12);
+  EXPECT_EQ(listed[1], INFINITY) << "not measured 1 mm apart";
+  EXPECT_NEAR(listed[2], gap, 1e-12) << "came back from below: a new pair";
+  EXPECT_EQ(listed[2], fresh[0]);
+}
+
 TEST(ImpulseLaw, EachImpulseConservesMomentum) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<Real> U(-1, 1), S(0, 1);
