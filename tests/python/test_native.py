@@ -63,7 +63,13 @@ def _scene(script, out, args, native, site=None):
 SCENES = {
     'smith': ('smith.py', ['elements=1000', 'levels=1', 'duration=0.5']),
     'tension': ('tension.py', ['nx=3', 'ny=3', 'samples=20']),
-    'ballistic': ('ballistic.py', ['side=0.004', 't_end=3e-6', 'vtk_every=-1', 'progress=0', 'samples=20']),
+    # pictures=0: the rendered pictures are paths, not figures (and 7 s a run)
+    'ballistic': ('ballistic.py', ['side=0.004', 't_end=3e-6', 'vtk_every=-1', 'progress=0', 'samples=20', 'pictures=0']),
+    # what came after the plugin's first tests: a pack of plies, an FSP (cylinder parts with a chisel
+    # nose), yarn-yarn and projectile-yarn friction, the coloured sweep order
+    'ballistic_pack': ('ballistic.py', ['side=0.004', 't_end=3e-6', 'vtk_every=-1', 'progress=0', 'samples=20',
+                                        'pictures=0', 'plies=2', 'shape=fsp', 'friction=0.2', 'body_friction=0.3',
+                                        'sweep_order=coloured']),
 }
 
 
