@@ -82,6 +82,13 @@ bool WovenFabricEngine::collisionsOn() const
 void WovenFabricEngine::syncStage(bool apply)
 {
 	if (!fabric) return;
+	if (apply && haveSynced_) { // the per-step check: compares only, the core is read when something changed
+		bool pending = false;
+#define WOVEN_PENDING(obj, attr, field, name) pending = pending || obj->attr != synced_.field;
+		WOVEN_STAGE_FIELDS(WOVEN_PENDING)
+#undef WOVEN_PENDING
+		if (!pending) return;
+	}
 	woven::HostStageParams core;
 	woven::hostStageParams(*fabric, core);
 	if (!haveSynced_) { // adopted: the objects show the fabric's settings, whatever they held
@@ -186,7 +193,8 @@ long WovenFabricEngine::nodes() const { return fabric ? woven::hostNodes(*fabric
 
 void WovenFabricEngine::preSave(WovenFabricEngine&)
 {
-	syncStage(true); // the saved stage objects and the saved fabric agree
+	syncStage(false); // the saved stage objects and the saved fabric agree: the core's values,
+	syncStage(true);  // then the changes made from YADE since the last step
 	snapshot = fabric ? woven::yadeplugin::base64Encode(woven::engineSnapshot(*fabric)) : std::string();
 }
 

@@ -36,7 +36,8 @@ public:
 	/// Brings the stage objects (shape, bound, collider, geom, phys, law) and the core's collision
 	/// stage together, field by field: an attribute changed since the last sync is a pending change
 	/// (applied to the core when `apply`: at a step and at O.save), any other takes the core's value
-	/// (so a change made through woven's Python API shows here). Throws woven::ParameterError naming
+	/// (so a change made through woven's Python API shows here; with `apply` and nothing changed, the
+	/// per-step case, nothing is read). Throws woven::ParameterError naming
 	/// the attribute (e.g. law.restitution) on a bad value, the core unchanged.
 	void syncStage(bool apply);
 	woven::HostStageParams synced_; // the values the stage objects had at the last sync
