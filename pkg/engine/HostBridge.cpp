@@ -1,5 +1,6 @@
 #include "engine/HostBridge.hpp"
 #include "engine/FabricEngine.hpp"
+#include "core/Errors.hpp"
 #include "shape/Section.hpp"
 
 namespace woven {
@@ -63,6 +64,64 @@ void hostTubes(const FabricEngine& e, HostTubes& out) {
     out.elements.push_back(a);
     out.strain.push_back(((f.pos[a + 1] - f.pos[a]).norm() - f.restLength[el]) / f.restLength[el]);
   }
+}
+
+namespace {
+
+const char* broadPhaseName(BroadPhase b) { return b == BroadPhase::YarnTree ? "tree" : b == BroadPhase::Grid ? "grid" : "sap"; }
+const char* flatteningName(Flattening f) { return f == Flattening::Geometric ? "geometric" : f == Flattening::None ? "none" : "springs"; }
+
+void toHost(const ContactParams& p, BroadPhase broad, HostStageParams& h) {
+  h.sectionRule = sectionRuleName(p.rule), h.flattening = flatteningName(p.flattening), h.mcd = p.mcd;
+  h.flattenPasses = p.flattenPasses, h.margin = p.margin;
+  h.broadPhase = broadPhaseName(broad), h.skin = p.skin, h.selfExclude = static_cast<int>(p.selfExclude);
+  h.yarnContacts = p.yarnContacts, h.threads = p.threads;
+  h.model = p.model == ContactModel::Gap ? "gap" : "paper", h.cacheDistance = p.cacheDistance;
+  h.penaltyStiffness = p.penaltyStiffness, h.penaltyDamping = p.penaltyDamping, h.sectionStiffness = p.sectionStiffness;
+  h.response = p.response == Response::Impulse ? "impulse" : "penalty";
+  h.sweepOrder = p.sweepOrder == SweepOrder::Coloured ? "coloured" : "sequential";
+  h.restitution = p.restitution, h.friction = p.friction, h.bodyFriction = p.bodyFriction, h.tolerance = p.tolerance;
+  h.positionCorrection = p.positionCorrection, h.correctionSlop = p.correctionSlop;
+  h.projectionSlop = p.projectionSlop, h.projectionMaxMove = p.projectionMaxMove;
+  h.maxIterations = p.maxIterations, h.projectionSweeps = p.projectionSweeps;
+}
+
+}  // namespace
+
+void hostStageParams(const FabricEngine& e, HostStageParams& out) {
+  const CollisionStage* st = e.collisions();
+  if (!st) {
+    hostStageDefaults(out);
+    return;
+  }
+  toHost(st->params(), st->broadPhase, out);
+  out.collisions = true;
+  out.gridCell = st->grid.cellSize;
+}
+
+void hostStageDefaults(HostStageParams& out) {
+  toHost(ContactParams(), BroadPhase::YarnTree, out);
+  out.collisions = false, out.gridCell = 0;
+}
+
+void hostSetStageParams(FabricEngine& e, const HostStageParams& h) {
+  if (!e.collisions())
+    throw ParameterError("collisions", "off", "on: FabricEngine.enable_collisions(...) first (woven.contact.enable)");
+  // The names first (each throws naming its parameter), then enableCollisions validates the numbers
+  // before it changes anything.
+  ContactParams p;
+  p.rule = sectionRuleByName(h.sectionRule), p.flattening = flatteningByName(h.flattening);
+  p.model = contactModelByName(h.model), p.response = responseByName(h.response), p.sweepOrder = sweepOrderByName(h.sweepOrder);
+  const BroadPhase broad = broadPhaseByName(h.broadPhase);
+  p.mcd = h.mcd, p.flattenPasses = h.flattenPasses, p.margin = h.margin;
+  p.skin = h.skin, p.selfExclude = static_cast<Index>(h.selfExclude), p.yarnContacts = h.yarnContacts, p.threads = h.threads;
+  p.cacheDistance = h.cacheDistance;
+  p.penaltyStiffness = h.penaltyStiffness, p.penaltyDamping = h.penaltyDamping, p.sectionStiffness = h.sectionStiffness;
+  p.restitution = h.restitution, p.friction = h.friction, p.bodyFriction = h.bodyFriction, p.tolerance = h.tolerance;
+  p.positionCorrection = h.positionCorrection, p.correctionSlop = h.correctionSlop;
+  p.projectionSlop = h.projectionSlop, p.projectionMaxMove = h.projectionMaxMove;
+  p.maxIterations = h.maxIterations, p.projectionSweeps = h.projectionSweeps;
+  e.enableCollisions(p, broad);
 }
 
 }  // namespace woven

@@ -48,6 +48,44 @@ void hostTubes(const FabricEngine& e, HostTubes& out);
 /// plugin (py/woven/_native.py). "static" for a core built without an id.
 const char* coreBuildId();
 
+/// The collision stage's settings as plain data: ContactParams and the broad phase, enums by the names
+/// FabricEngine.enable_collisions takes. The plugin shows them as its own YADE objects (WovenCPShape,
+/// WovenCPBound, WovenCollider, WovenGeomFunctor, WovenPhys, WovenImpulseLaw; pkg/yade/WovenStage.hpp).
+struct HostStageParams {
+  bool collisions = false;  ///< out: the fabric has a collision stage (false: the rest are the defaults)
+  // the CP's elliptic sections (shape/Section, the flattening of law/Flatten)
+  std::string sectionRule, flattening;
+  double mcd = 0;
+  int flattenPasses = 0;
+  // the OBB bound functor (bound/CPBound)
+  double margin = 0;
+  // the collider (broad phase)
+  std::string broadPhase;
+  double skin = 0;
+  int selfExclude = 0;
+  bool yarnContacts = true;
+  int threads = 0;
+  double gridCell = 0;  ///< out: cell size of the grid collider's last broad phase [m] (0: none yet)
+  // the geometry functor (narrow phase)
+  std::string model;
+  double cacheDistance = 0;
+  // the contact physics of the force responses
+  double penaltyStiffness = 0, penaltyDamping = 0, sectionStiffness = 0;
+  // the law (impulses, position projection / correction)
+  std::string response, sweepOrder;
+  double restitution = 0, friction = 0, bodyFriction = 0, tolerance = 0, positionCorrection = 0, correctionSlop = 0;
+  double projectionSlop = 0, projectionMaxMove = 0;
+  int maxIterations = 0, projectionSweeps = 0;
+};
+/// The settings of e's collision stage (collisions off: ContactParams' defaults, collisions = false).
+void hostStageParams(const FabricEngine& e, HostStageParams& out);
+/// The defaults (FabricEngine.enable_collisions() with no arguments).
+void hostStageDefaults(HostStageParams& out);
+/// Applies p to e's collision stage as FabricEngine.enable_collisions does (pairs and carried contacts
+/// are measured again). Validates first: throws ParameterError (the enable_collisions name of the
+/// parameter) and changes nothing on bad input, or when collisions are off.
+void hostSetStageParams(FabricEngine& e, const HostStageParams& p);
+
 // pkg/engine/Snapshot.hpp, declared here for hosts that do not include woven's classes.
 std::string engineSnapshot(FabricEngine& e);
 std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes);

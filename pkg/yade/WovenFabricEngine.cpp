@@ -7,7 +7,7 @@
 
 namespace yade {
 
-YADE_PLUGIN((WovenFabricEngine));
+YADE_PLUGIN((WovenFabricEngine)(WovenCPShape)(WovenCPBound)(WovenCollider)(WovenGeomFunctor)(WovenPhys)(WovenImpulseLaw));
 
 namespace {
 
@@ -23,7 +23,98 @@ void reportToPython(const char* kind, const std::exception& e, long step, long n
 	}
 }
 
+// The stage objects' attributes and the core's settings they stand for: (object, attribute,
+// woven::HostStageParams field, the parameter's name in the core's messages, as enable_collisions calls it).
+#define WOVEN_STAGE_FIELDS(F)                                                                                                   \
+	F(shape, sectionRule, sectionRule, "section_rule")                                                                          \
+	F(shape, mcd, mcd, "mcd")                                                                                                   \
+	F(shape, flattening, flattening, "flattening")                                                                              \
+	F(shape, flattenPasses, flattenPasses, "flatten_passes")                                                                    \
+	F(bound, margin, margin, "margin")                                                                                          \
+	F(collider, kind, broadPhase, "broad_phase")                                                                                \
+	F(collider, skin, skin, "skin")                                                                                             \
+	F(collider, selfExclude, selfExclude, "self_exclude")                                                                       \
+	F(collider, yarnContacts, yarnContacts, "yarn_contacts")                                                                    \
+	F(collider, threads, threads, "threads")                                                                                    \
+	F(geom, model, model, "contact_model")                                                                                      \
+	F(geom, cacheDistance, cacheDistance, "contact_cache")                                                                      \
+	F(phys, penaltyStiffness, penaltyStiffness, "penalty_stiffness")                                                            \
+	F(phys, penaltyDamping, penaltyDamping, "penalty_damping")                                                                  \
+	F(phys, sectionStiffness, sectionStiffness, "section_stiffness")                                                            \
+	F(law, response, response, "response")                                                                                      \
+	F(law, restitution, restitution, "restitution")                                                                             \
+	F(law, friction, friction, "friction")                                                                                      \
+	F(law, bodyFriction, bodyFriction, "body_friction")                                                                         \
+	F(law, tolerance, tolerance, "tolerance")                                                                                   \
+	F(law, maxIterations, maxIterations, "max_iterations")                                                                      \
+	F(law, sweepOrder, sweepOrder, "sweep_order")                                                                               \
+	F(law, projectionSweeps, projectionSweeps, "projection_sweeps")                                                             \
+	F(law, projectionSlop, projectionSlop, "projection_slop")                                                                   \
+	F(law, projectionMaxMove, projectionMaxMove, "projection_max_move")                                                         \
+	F(law, positionCorrection, positionCorrection, "position_correction")                                                       \
+	F(law, correctionSlop, correctionSlop, "correction_slop")
+
+// The core's message for a parameter ("friction = 3 is invalid: allowed ...") under the attribute's
+// name ("law.friction = 3 is invalid: allowed ..."), so the user sees what to change on the YADE side.
+woven::ParameterError renamed(const woven::ParameterError& e)
+{
+	std::string attr = e.parameter();
+#define WOVEN_ATTR_NAME(obj, attr_, field, name)                                                                                \
+	if (e.parameter() == name) attr = #obj "." #attr_;
+	WOVEN_STAGE_FIELDS(WOVEN_ATTR_NAME)
+#undef WOVEN_ATTR_NAME
+	const std::string msg = e.what(), eq = " = ", inv = " is invalid: allowed ";
+	const std::size_t a = msg.find(eq), b = msg.find(inv);
+	if (a == std::string::npos || b == std::string::npos || b < a) return woven::ParameterError("WovenFabricEngine." + attr, "?", msg);
+	return woven::ParameterError("WovenFabricEngine." + attr, msg.substr(a + eq.size(), b - a - eq.size()), msg.substr(b + inv.size()));
+}
+
 } // namespace
+
+bool WovenFabricEngine::collisionsOn() const
+{
+	if (!fabric) return false;
+	woven::HostStageParams p;
+	woven::hostStageParams(*fabric, p);
+	return p.collisions;
+}
+
+void WovenFabricEngine::syncStage(bool apply)
+{
+	if (!fabric) return;
+	if (apply && haveSynced_) { // the per-step check: compares only, the core is read when something changed
+		bool pending = false;
+#define WOVEN_PENDING(obj, attr, field, name) pending = pending || obj->attr != synced_.field;
+		WOVEN_STAGE_FIELDS(WOVEN_PENDING)
+#undef WOVEN_PENDING
+		if (!pending) return;
+	}
+	woven::HostStageParams core;
+	woven::hostStageParams(*fabric, core);
+	if (!haveSynced_) { // adopted: the objects show the fabric's settings, whatever they held
+#define WOVEN_TAKE(obj, attr, field, name) obj->attr = core.field;
+		WOVEN_STAGE_FIELDS(WOVEN_TAKE)
+#undef WOVEN_TAKE
+		synced_ = core, haveSynced_ = true;
+	}
+	// An attribute that differs from the last sync was set from YADE: it is wanted on the core. Any
+	// other follows the core (changes made through the Python module show here).
+	woven::HostStageParams want = core;
+	bool pending = false;
+#define WOVEN_MERGE(obj, attr, field, name)                                                                                     \
+	if (obj->attr != synced_.field) want.field = obj->attr, pending = true;                                                     \
+	else obj->attr = core.field, synced_.field = core.field;
+	WOVEN_STAGE_FIELDS(WOVEN_MERGE)
+#undef WOVEN_MERGE
+	collider->cellSize = core.gridCell;
+	if (!apply || !pending) return;
+	try {
+		woven::hostSetStageParams(*fabric, want); // validates first: on bad input nothing changes
+	} catch (const woven::ParameterError& e) {
+		throw renamed(e);
+	}
+	synced_ = want;
+}
 
 void WovenFabricEngine::action()
 {
@@ -40,6 +131,7 @@ void WovenFabricEngine::action()
 		h.ori[0] = s.ori.x(), h.ori[1] = s.ori.y(), h.ori[2] = s.ori.z(), h.ori[3] = s.ori.w();
 	}
 	try {
+		syncStage(true); // stage attributes set from YADE since the last step
 		woven::hostStep(*fabric, scene->dt, bodies_, rewind);
 	} catch (const woven::InstabilityError& e) {
 		lastError = e.what();
@@ -84,6 +176,8 @@ void WovenFabricEngine::adopt(const boost::python::object& engine)
 	if (!x.check()) throw std::invalid_argument("engine = " + std::string(boost::python::extract<std::string>(boost::python::str(engine))()) + " is invalid: allowed a woven.FabricEngine");
 	fabric = x();
 	lastError.clear();
+	haveSynced_ = false;
+	syncStage(false); // the stage objects show the fabric's settings
 }
 
 boost::python::object WovenFabricEngine::pyFabric()
@@ -99,6 +193,8 @@ long WovenFabricEngine::nodes() const { return fabric ? woven::hostNodes(*fabric
 
 void WovenFabricEngine::preSave(WovenFabricEngine&)
 {
+	syncStage(false); // the saved stage objects and the saved fabric agree: the core's values,
+	syncStage(true);  // then the changes made from YADE since the last step
 	snapshot = fabric ? woven::yadeplugin::base64Encode(woven::engineSnapshot(*fabric)) : std::string();
 }
 
@@ -109,6 +205,19 @@ void WovenFabricEngine::postLoad(WovenFabricEngine&)
 	if (snapshot.empty()) return;
 	fabric = woven::restoreSnapshot(woven::yadeplugin::base64Decode(snapshot));
 	snapshot.clear();
+	// The stage objects were saved synced with the fabric (preSave): they are the last sync, so only
+	// later changes (none, unless the file was edited) are applied at the next step.
+	if (!shape) shape = shared_ptr<WovenCPShape>(new WovenCPShape);
+	if (!bound) bound = shared_ptr<WovenCPBound>(new WovenCPBound);
+	if (!collider) collider = shared_ptr<WovenCollider>(new WovenCollider);
+	if (!geom) geom = shared_ptr<WovenGeomFunctor>(new WovenGeomFunctor);
+	if (!phys) phys = shared_ptr<WovenPhys>(new WovenPhys);
+	if (!law) law = shared_ptr<WovenImpulseLaw>(new WovenImpulseLaw);
+	woven::hostStageParams(*fabric, synced_);
+#define WOVEN_LOADED(obj, attr, field, name) synced_.field = obj->attr;
+	WOVEN_STAGE_FIELDS(WOVEN_LOADED)
+#undef WOVEN_LOADED
+	haveSynced_ = true;
 }
 
 } // namespace yade

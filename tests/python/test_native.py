@@ -63,7 +63,13 @@ def _scene(script, out, args, native, site=None):
 SCENES = {
     'smith': ('smith.py', ['elements=1000', 'levels=1', 'duration=0.5']),
     'tension': ('tension.py', ['nx=3', 'ny=3', 'samples=20']),
-    'ballistic': ('ballistic.py', ['side=0.004', 't_end=3e-6', 'vtk_every=-1', 'progress=0', 'samples=20']),
+    # pictures=0: the rendered pictures are paths, not figures (and 7 s a run)
+    'ballistic': ('ballistic.py', ['side=0.004', 't_end=3e-6', 'vtk_every=-1', 'progress=0', 'samples=20', 'pictures=0']),
+    # what came after the plugin's first tests: a pack of plies, an FSP (cylinder parts with a chisel
+    # nose), yarn-yarn and projectile-yarn friction, the coloured sweep order
+    'ballistic_pack': ('ballistic.py', ['side=0.004', 't_end=3e-6', 'vtk_every=-1', 'progress=0', 'samples=20',
+                                        'pictures=0', 'plies=2', 'shape=fsp', 'friction=0.2', 'body_friction=0.3',
+                                        'sweep_order=coloured']),
 }
 
 
@@ -179,3 +185,94 @@ def test_instability_sets_last_error_as_the_pyrunner(yade_ns):
     err = woven.engine.last_error
     assert isinstance(err, woven.InstabilityError) and err.step > 0 and 'energy blow-up' in err.cause
     assert 'unstable' in O.engines[-1].lastError
+
+
+# --- the collision stage's settings as YADE objects (pkg/yade/WovenStage.hpp) ---
+
+STAGE = {'shape': 'WovenCPShape', 'bound': 'WovenCPBound', 'collider': 'WovenCollider', 'geom': 'WovenGeomFunctor',
+         'phys': 'WovenPhys', 'law': 'WovenImpulseLaw'}
+
+
+def test_stage_objects_show_the_core_settings(yade_ns):
+    """The engine's stage objects are registered YADE classes; reading them shows the fabric's collision
+    stage as woven's Python API set it (before and after attach), their defaults are the core's."""
+    O, wrapper = yade_ns.O, yade_ns.wrapper
+    O.reset()
+    O.engines = []
+    w = woven.weave(nx=1, ny=1)
+    e = w.engine
+    n = woven.attach(e)
+    assert not n.collisions
+    for attr, cls in STAGE.items():
+        assert hasattr(wrapper, cls) and type(getattr(n, attr)).__name__ == cls
+    e.enable_collisions()  # the core's defaults (ContactParams())
+    assert n.collisions
+    for attr, cls in STAGE.items():  # a fresh object's defaults are the core's defaults
+        fresh = getattr(wrapper, cls)().dict()
+        shown = getattr(n, attr).dict()
+        fresh.pop('cellSize', None), shown.pop('cellSize', None)
+        assert shown == fresh, attr
+    # changed through the Python module after attach: shown on the YADE side
+    woven.contact.enable(e, friction=0.25, restitution=0.1, broad_phase='grid', sweep_order='coloured', mcd=0.5,
+                         margin=2e-6, contact_model='paper', penalty_stiffness=2e5)
+    assert (n.law.friction, n.law.restitution, n.law.sweepOrder) == (0.25, 0.1, 'coloured')
+    assert (n.collider.kind, n.shape.mcd, n.bound.margin, n.geom.model, n.phys.penaltyStiffness) == \
+        ('grid', 0.5, 2e-6, 'paper', 2e5)
+    O.run(3, True)
+    assert n.collider.cellSize > 0  # the grid collider ran: its cell, read back from the core
+
+
+def test_stage_attribute_applies_to_the_core(yade_ns):
+    """An attribute set from YADE changes the core's stage at the next step (the run differs from one
+    without it), a bad value stops the run naming the attribute and its range, the core unchanged."""
+    O = yade_ns.O
+    e, pid, n = _struck_ply(yade_ns)
+    O.run(60, True)
+    O.saveTmp('stage0')
+    O.run(60, True)
+    plain = _fingerprint(O, e, pid)
+    assert e.energy()['friction'] == 0  # the ply as built: frictionless
+    O.loadTmp('stage0')
+    n, e = O.engines[-1], O.engines[-1].fabric
+    n.law.friction = 0.4
+    n.law.bodyFriction = 0.3
+    O.run(60, True)
+    assert e.energy()['friction'] > 0  # the impulses' tangential parts worked: friction is on in the core
+    assert _fingerprint(O, e, pid) != plain
+    n.law.restitution = 5.0
+    with pytest.raises(RuntimeError, match=r'WovenFabricEngine\.law\.restitution = 5 is invalid: allowed \[0, 1\]'):
+        O.run(1, True)
+    assert isinstance(woven.engine.last_error, ValueError)
+    n.law.restitution = 0.0
+    assert n.law.friction == 0.4  # the rest of the stage as set
+    O.run(1, True)
+
+
+@pytest.mark.parametrize('ext', ['.xml', '.yade.gz'])
+def test_stage_attributes_survive_save_load(yade_ns, tmp_path, ext):
+    """Stage attributes set from YADE are saved by O.save and hold after O.load, in the objects and in
+    the core, and the loaded run continues bit for bit as the one that saved."""
+    O = yade_ns.O
+    e, pid, n = _struck_ply(yade_ns)
+    O.run(60, True)
+    n.law.friction = 0.3
+    n.law.bodyFriction = 0.2
+    n.law.sweepOrder = 'coloured'
+    n.collider.kind = 'grid'
+    n.shape.flattenPasses = 6
+    path = str(tmp_path / ('scene' + ext))
+    O.save(path)  # preSave applies them to the core first
+    O.run(120, True)
+    ref = _fingerprint(O, e, pid)
+    assert e.energy()['friction'] > 0
+    O.load(path)
+    n2 = O.engines[-1]
+    e2 = n2.fabric
+    assert not e2._same(e) and e2.iter == 60
+    assert (n2.law.friction, n2.law.bodyFriction, n2.law.sweepOrder, n2.collider.kind, n2.shape.flattenPasses) == \
+        (0.3, 0.2, 'coloured', 'grid', 6)
+    if ext == '.xml':  # the file holds them as the engine's attributes
+        text = open(path).read()
+        assert '<law ' in text and '<sweepOrder>coloured</sweepOrder>' in text and '<kind>grid</kind>' in text
+    O.run(120, True)
+    assert _fingerprint(O, e2, pid) == ref
