@@ -48,8 +48,11 @@ def load(key, folder):
                          % (key, p[key], path, ex))
     if s.get('scene') != 'campaign':
         raise ValueError('%s = %r is invalid: %s is a %r summary, not a campaign\'s' % (key, p[key], path, s.get('scene')))
-    with open(os.path.join(folder, 'campaign.csv')) as f:
-        rows = list(csv.DictReader(f))
+    try:
+        with open(os.path.join(folder, 'campaign.csv')) as f:
+            rows = list(csv.DictReader(f))
+    except OSError as ex:
+        raise ValueError('%s = %r is invalid: %s has no campaign.csv (%s)' % (key, p[key], folder, ex))
     if not rows:
         raise ValueError('%s = %r is invalid: %s holds no runs' % (key, p[key], folder))
     runs = []
