@@ -84,7 +84,19 @@ for tok in shlex.split(p.scene.replace(';', ' ')):
     if k in ('V', 'seed', 'weibull_m', 't_end', 'out'):
         bad('scene', "keys other than V, seed, weibull_m, t_end and out (the campaign's own keys set them)")
     scene[k] = v
-woven.contact.check_friction(scene)  # friction and body_friction refused before any run starts
+
+
+def scene_value(v):
+    """A scene value as ballistic.py will read it: a number when it parses as one (check_friction
+    refuses strings for numbers, so scene='friction=0.2' was refused as 'not a number')."""
+    try:
+        return float(v)
+    except ValueError:
+        return v
+
+
+# friction and body_friction refused before any run starts
+woven.contact.check_friction({k: scene_value(v) for k, v in scene.items()})
 d = out_dir('campaign', p)
 # What every run gets besides V and seed: no VTK and no progress lines (the campaign has its own bar).
 # No pictures either (a render per run; the back-face figures are still in each summary.json).

@@ -145,6 +145,20 @@ def test_bad_keys_name_the_key(tmp_path, arg, key):
     assert r.returncode != 0 and ('%s = ' % key) in log and 'allowed' in log, log
 
 
+def test_friction_in_the_scene_is_passed_on(tmp_path):
+    # scene values are strings; the friction check used to refuse '0.2' as "not a number", so no
+    # campaign with friction could start. The run must get it and book friction work.
+    r = subprocess.run(['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'campaign.py'), 'out=%s' % tmp_path,
+                        'velocities=100', 'seeds=1', 't_end=2e-5', 'fit=0',
+                        'scene=%s friction=0.2 body_friction=0.3' % SCENE],
+                       cwd=str(tmp_path), capture_output=True, text=True, timeout=300)
+    log = r.stdout + r.stderr
+    assert r.returncode == 0, log
+    s = json.load(open(tmp_path / 'runs' / 'V0100.0-s1' / 'summary.json'))
+    assert s['parameters']['friction'] == 0.2 and s['parameters']['body_friction'] == 0.3
+    assert s['measured']['energy']['friction'] > 0
+
+
 def test_unknown_ballistic_key_stops_the_campaign_at_the_first_run(tmp_path):
     r = subprocess.run(['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'campaign.py'), 'out=%s' % tmp_path,
                         'velocities=50,60,70', 'seeds=1', 'scene=sidee=0.004'],
