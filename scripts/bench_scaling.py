@@ -18,7 +18,7 @@ import numpy as np
 import woven
 import woven.ballistic
 from woven.contact import CONTACT_KEYS
-from woven.output import atomic_open, out_dir, savefig, write_summary
+from woven.output import out_dir, savefig, write_csv, write_summary
 from woven.params import read_params
 
 p = read_params({'cps': ('1e3,3e3,1e4,3e4,1e5,3e5,1e6', '', 'target CP counts, comma-separated, each in [100, 2e6]'),
@@ -115,11 +115,7 @@ for scene in scenes:
         print('bench_scaling: %s: t = %.3g s x N^%.3f (N from %d to %d CPs)' %
               (scene, math.exp(a), b, fits[scene]['from_cps'], fits[scene]['to_cps']))
 
-fields = list(dict.fromkeys(k for x in rows for k in x))
-with atomic_open('%s/scaling.csv' % d, 'w') as f:
-    f.write(','.join(fields) + '\n')
-    for x in rows:
-        f.write(','.join('%.6g' % x[k] if isinstance(x.get(k), float) else str(x.get(k, '')) for k in fields) + '\n')
+write_csv('%s/scaling.csv' % d, list(dict.fromkeys(k for x in rows for k in x)), rows)
 
 import matplotlib
 matplotlib.use('Agg')

@@ -30,7 +30,7 @@ import numpy as np
 import woven  # noqa: F401  (checks the install)
 from woven.params import read_params
 from woven.output import out_dir, write_summary
-from woven.output import atomic_open, savefig
+from woven.output import atomic_open, csv_field, savefig, write_csv
 
 p = read_params({
     'quick': (False, '', 'a reduced set of cases (a few minutes, for CI)'),
@@ -192,17 +192,10 @@ COLS = ['method', 'cp_per_span', 'dt_over_dt_crit', 'stiffness', 'status', 'v_en
 
 
 def fmt(v):
-    if v is None:
-        return ''
-    if isinstance(v, float):
-        return '%.4g' % v
-    return str(v)
+    return csv_field(v, 4)
 
 
-with atomic_open(os.path.join(d, 'cases.csv')) as f:
-    f.write(','.join(COLS) + '\n')
-    for r in rows:
-        f.write(','.join(fmt(r.get(k)) for k in COLS) + '\n')
+write_csv(os.path.join(d, 'cases.csv'), COLS, rows, 4)
 with atomic_open(os.path.join(d, 'table.md')) as f:
     f.write('| method | CPs/span | dt/dt_crit | stiffness [N/m] | status | v_end [m/s] | velocity-drop error | '
             'max yarn overlap [mm] | max projectile overlap [mm] | energy error | wall s / us |\n')

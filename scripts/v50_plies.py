@@ -11,14 +11,12 @@
 # density; Cunniff's axes; V50 against friction), summary.json (U*, the rows, checks).
 import csv
 import json
-import math
 import os
-import shlex
 import sys
 
 import woven
 import woven.cunniff as cunniff
-from woven.output import atomic_open, out_dir, savefig, write_summary
+from woven.output import csv_field as fmt, out_dir, savefig, write_csv, write_summary
 from woven.params import read_params
 from woven.weave import WEAVE_KEYS
 
@@ -155,19 +153,8 @@ d = out_dir('v50_plies', p)
 cols = list(ply_rows[0].keys())
 
 
-def fmt(v):
-    if v is None:
-        return ''
-    if isinstance(v, float):
-        return '%.6g' % v
-    return str(v)
-
-
-with atomic_open(os.path.join(d, 'v50_plies.csv')) as f:
-    f.write(','.join(['family'] + cols) + '\n')
-    for fam, rows in (('plies', ply_rows), ('friction', fric_rows)):
-        for r in rows:
-            f.write(','.join([fam] + [fmt(r[k]) for k in cols]) + '\n')
+write_csv(os.path.join(d, 'v50_plies.csv'), ['family'] + cols,
+          [dict(r, family=fam) for fam, rows in (('plies', ply_rows), ('friction', fric_rows)) for r in rows])
 
 # Checks: every campaign fitted; V50 rises with the ply count (a thicker pack of the same fabric
 # must not stop less); every run's energy balance within ballistic.py's 1 %.

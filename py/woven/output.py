@@ -48,6 +48,23 @@ def atomic_open(path, mode='w'):
             f.flush()
 
 
+def csv_field(v, digits=6):
+    """One CSV field: '' for None, a float to `digits` significant digits, anything else as str."""
+    if v is None:
+        return ''
+    if isinstance(v, float):
+        return '%.*g' % (digits, v)
+    return str(v)
+
+
+def write_csv(path, columns, rows, digits=6):
+    """Writes dict rows under `columns` (a row's missing key: an empty field), atomically."""
+    with atomic_open(path) as f:
+        f.write(','.join(columns) + '\n')
+        for r in rows:
+            f.write(','.join(csv_field(r.get(k), digits) for k in columns) + '\n')
+
+
 def write_text_atomic(path, text):
     with atomic_open(path) as f:
         f.write(text)

@@ -128,10 +128,11 @@ TEST(Threads, BallisticSceneWithBreakageIsTheSameBitsOnOneTwoAndThreeThreads) {
   for (int t : {2, 3}) expectSame(one, ballistic(t, steps), t);
 }
 
-// The broad phase only lists candidates: the narrow phase decides each pair from its positions and
-// forgets the memory of a pair it does not measure, so neither the skin (how long a list is kept)
-// nor the collider (the grid re-colliding only the CPs that left their skin boxes, the OBB tree their
-// yarns, sweep and prune all) may change a bit of the struck ply, breaks and whipping ends included.
+// The broad phase only lists candidates: the narrow phase decides each pair from its positions, so
+// neither the skin (how long a list is kept) nor the collider (the grid re-colliding only the CPs
+// that left their skin boxes, the OBB tree their yarns, sweep and prune all) may change a bit of the
+// struck ply, breaks included: a pair the partial lists missed would show here. (That a listed pair
+// no longer measured forgets its memory is tested in test_collisions.cpp: this run does not reach it.)
 TEST(Threads, BallisticSceneIsTheSameBitsForAnySkinAndBroadPhase) {
   const int steps = static_cast<int>(runLength(300, 3));
   const Outcome one = ballistic(1, steps);
