@@ -27,6 +27,11 @@ inline double since(Clock::time_point& t) {
 inline bool lockedCP(const Fabric& f, Index e, Real mcd) {
   return f.secFlat[f.elem0[e]] >= mcd && f.secFlat[f.elem0[e] + 1] >= mcd;
 }
+// A body contact's key: its CP, body and part.
+inline std::uint64_t bodyKey(Index cp, int body, int part) {
+  return (static_cast<std::uint64_t>(cp) << 32) | (static_cast<std::uint64_t>(body & 0xffff) << 16) |
+         static_cast<std::uint64_t>(part & 0xffff);
+}
 }  // namespace
 
 // What flattening can still take along a contact's normal (both CPs) [m]: the impulse rows' room
@@ -326,20 +331,24 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
 
 void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
   // The last step's contacts, by CP, body and part: the gap model's measure memory (bodyGap).
-  const auto key = [](Index cp, int body, int part) {
-    return (static_cast<std::uint64_t>(cp) << 32) | (static_cast<std::uint64_t>(body & 0xffff) << 16) |
-           static_cast<std::uint64_t>(part & 0xffff);
-  };
   heldBody_.swap(bodyContacts_);
   if (heldFor_ != bodies.size() || forgetHeld_) heldBody_.clear();  // bodies added or removed: indices moved
   heldFor_ = bodies.size(), forgetHeld_ = false;
   heldKeys_.clear();
   for (std::size_t q = 0; q < heldBody_.size(); ++q)
-    heldKeys_.emplace_back(key(heldBody_[q].cp, heldBody_[q].body, heldBody_[q].part), q);
+    heldKeys_.emplace_back(bodyKey(heldBody_[q].cp, heldBody_[q].body, heldBody_[q].part), q);
   std::sort(heldKeys_.begin(), heldKeys_.end());
   bodyContacts_.clear();
+  bodyPairs_.clear();
   if (bodies.empty()) return;
   bodyCollider.collide(f, grown_, grow_, bodies, dt, bodyPairs_);
+  measureBodies(f, dt);
+}
+
+// The body contacts of the candidates (bodyPairs_) with the sections as they stand, each with the
+// last step's contact of its CP, body and part (heldBody_) as its measure memory.
+void CollisionStage::measureBodies(const Fabric& f, Real dt) {
+  bodyContacts_.clear();
   BodyContact c[2];
   const bool gapModel = params_.model == ContactModel::Gap;
   // The position projection may move a node by this much after the drift (toward the body, pushed
@@ -349,8 +358,8 @@ void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
     const BodyContact* held = nullptr;
     if (gapModel) {
       const auto it = std::lower_bound(heldKeys_.begin(), heldKeys_.end(),
-                                       std::make_pair(key(pc.cp, pc.body, pc.part), std::size_t(0)));
-      if (it != heldKeys_.end() && it->first == key(pc.cp, pc.body, pc.part)) held = &heldBody_[it->second];
+                                       std::make_pair(bodyKey(pc.cp, pc.body, pc.part), std::size_t(0)));
+      if (it != heldKeys_.end() && it->first == bodyKey(pc.cp, pc.body, pc.part)) held = &heldBody_[it->second];
     }
     const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin + projected, params_.rule, c,
                                      &tangent_, held)
@@ -365,7 +374,7 @@ void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
 
 // Paper Sec. 5.1 steps 1-3: take up each overlap by flattening the sections of both CPs (half each,
 // the rest by the other when one is locked), re-test the contacts whose CPs changed, repeat.
-int CollisionStage::flatten(Fabric& f, int maxPasses) {
+int CollisionStage::flatten(Fabric& f, int maxPasses, Real bodyDt) {
   const Real tiny = 1e-15;  // [m]
   int passes = 0;
   for (; passes < maxPasses; ++passes) {
@@ -416,6 +425,23 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
       ++stats.flattened;
       any = true;
     }
+    // The body contacts (model Gap, within a step): the paper's response (Sec. 5.1 steps 1-3) holds
+    // for any two colliding OBBs, the projectile's among them. A body flattens nothing; the CP's
+    // sections at the contact take up the overlap (and what the measure memory holds back) along the
+    // normal, up to the MCD. Without it, at 4 CPs per span a sphere reaching a node between two
+    // crossings, still round (2.4 times the flattened half-thickness), sat 15 um inside it.
+    bool bodyFlattened = false;
+    if (bodyDt >= 0 && params_.model == ContactModel::Gap && params_.flattening == Flattening::Geometric)
+      for (const BodyContact& c : bodyContacts_) {
+        if (!(c.gap < -tiny) || lockedCP(f, c.cp, params_.mcd)) continue;
+        const Real cap = flatteningCapacityAt(f, tangent_, c.cp, c.s, c.normal, false, params_, &flatBefore_);
+        if (cap <= tiny) continue;
+        flattenAt(f, tangent_, c.cp, c.s, c.normal, false, c.held - c.gap, params_, flatBefore_, dirSum_);
+        for (Index q = std::max(c.cp - 1, 0); q <= std::min(c.cp + 1, f.nElems() - 1); ++q)
+          if (f.elemYarn[q] == f.elemYarn[c.cp]) dirty_[q] = 1;
+        ++stats.flattened;
+        any = bodyFlattened = true;
+      }
     if (!any) break;
     turnSections(f, tangent_, flatBefore_, dirSum_);
     if (sectionStamp_.size() != f.elem0.size()) sectionStamp_.assign(f.elem0.size(), 0);
@@ -433,6 +459,7 @@ int CollisionStage::flatten(Fabric& f, int maxPasses) {
       if (cpContactStatic(f, bounds_, c.cpA, c.cpB, params_.margin, params_.rule, again)) c = again;
       else c.gap = 2 * params_.margin;  // apart now: at least this far
     });
+    if (bodyFlattened) measureBodies(f, bodyDt);  // the flattened sections, the same memory
   }
   return passes;
 }
@@ -514,7 +541,7 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   stats.moving = 0;
   for (const CPContact& c : contacts_) stats.moving += c.time > 0;
   stats.flattened = 0;
-  stats.flattenPasses = flattens ? flatten(f, params_.flattenPasses) : 0;
+  stats.flattenPasses = flattens ? flatten(f, params_.flattenPasses, dt) : 0;
   // Overlap after flattening (what neither flattening took nor the last projection removed): its
   // largest and mean values over the contacts in overlap, and sums for the mean over time.
   stats.penetration = 0;

@@ -2,7 +2,8 @@
 //   refit     section frames and the OBB of every CP (bound functor), grown by its motion in the step
 //   broad     candidate CP pairs (YarnTreeCollider, or the SweepAndPrune reference)
 //   narrow    static SAT contact, else the moving SAT's first contact within the step (geometry functor)
-//   respond   flatten sections (passes), impulses where flattening cannot absorb the approach, then
+//   respond   flatten sections (passes; pressed by yarns or, model Gap, by a body), impulses where
+//             flattening cannot absorb the approach, then
 //             positional correction of residual overlaps (law); or the alternatives of
 //             ContactParams::response / flattening: penalty forces on the overlaps, sections that
 //             never flatten, section springs (law/NormalForces; docs/collisions.md)
@@ -167,7 +168,10 @@ class CollisionStage : public StepHook {
   bool reuse(const Fabric& f, std::size_t k, CPContact& c) const;
   void remapCache(bool caching, bool gapModel);
   void narrowBodies(const Fabric& f, Real dt);
-  int flatten(Fabric& f, int maxPasses);
+  /// The flattening passes; with bodyDt >= 0 (a step's dt) the body contacts flatten the sections
+  /// they press too, and are measured again after each pass.
+  int flatten(Fabric& f, int maxPasses, Real bodyDt = -1);
+  void measureBodies(const Fabric& f, Real dt);
   std::function<Real(const CPContact&)> capacityOf(const Fabric& f) const;
   bool crossesSteeply(const Fabric& f, const CPContact& c) const;
   Real capacityOne(const Fabric& f, const CPContact& c, bool sideB, const std::vector<Real>* flat = nullptr) const;

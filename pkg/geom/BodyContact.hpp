@@ -37,6 +37,10 @@ struct BodyContact {
   Real secA = 0, secB = 0;
   Vec3 localNormal = Vec3::Zero();
   Real support[2] = {0, 0};
+  /// What the measure memory holds back [m]: the CP's sections as they stand reach this much further
+  /// into the body than the held ones the gap is measured with (CPContact::hHeld's rule); the
+  /// flattening passes must take it before the gap can grow.
+  Real held = 0;
 };
 
 /// Contact of CP `cp` (box `cpBox`, the bound functor's OBB) with part `part` of `body` within the

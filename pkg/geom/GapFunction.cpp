@@ -387,9 +387,10 @@ int cylinderGap(const Fabric& f, Index cp, const RigidBody& body, int part, Sect
       const bool sameFace = heldHere && held->localNormal.dot(local) > 0.999;
       const Real partMin = centre.dot(n) + cylinderMinAlong(body.parts[part], local);
       const Real room = partMin - f.pos[i + k].dot(n);
-      const Real support = std::min(ellipseSupport(u, d, ax.a, ax.b, n), std::max(sameFace ? held->support[k] : ax.b, room));
+      const Real full = ellipseSupport(u, d, ax.a, ax.b, n);
+      const Real support = std::min(full, std::max(sameFace ? held->support[k] : ax.b, room));
       const Real g = room - support;
-      if (g > best) best = g, c.normal = n, c.localNormal = local, c.support[k] = support;
+      if (g > best) best = g, c.normal = n, c.localNormal = local, c.support[k] = support, c.held = full - support;
     }
     c.s = k;
     c.support[1 - k] = 0;
@@ -426,7 +427,10 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
     if (held) k.secU = held->secU, k.secD = held->secD, k.secA = held->secA, k.secB = held->secB;
     else k.secA = q.b;
     k.gap = sphereGapAt(f.pos[i], f.pos[i + 1], centre, body.parts[part].radius, k, k.s, k.normal, k.point);
-    if (c.gap < std::min(k.gap, Real(0))) c = k;
+    if (c.gap < std::min(k.gap, Real(0))) {
+      k.held = k.gap - c.gap;
+      c = k;
+    }
     if (!listed(c)) return 0;
     out[0] = c;
     return 1;
@@ -442,24 +446,29 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
   // The measure memory (capMeasure's rule), on every face: each end section's support may grow
   // only into the room the box leaves, beyond its support at the last step on the same face (a new
   // contact, or another face: its half-thickness). Then the face that leaves the CP the most room.
-  Real best = -INFINITY;
+  Real best = -INFINITY, heldBack[2] = {0, 0};
   for (int j = 0; j < 6; ++j) {
     const Vec3 n = (j < 3 ? 1.0 : -1.0) * box.axes.col(j % 3);
     const bool sameFace = held && held->localNormal.dot(box.axes.transpose() * n) > 0.999;
     const Real boxMin = box.centre.dot(n) - (box.axes.transpose() * n).cwiseAbs().dot(box.extent);
     BodyContact h;
+    Real full[2];
     for (int k = 0; k < 2; ++k) {
       const Real room = boxMin - f.pos[i + k].dot(n);
-      h.support[k] = std::min(ellipseSupport(u[k], d[k], ax[k].a, ax[k].b, n),
-                              std::max(sameFace ? held->support[k] : ax[k].b, room));
+      full[k] = ellipseSupport(u[k], d[k], ax[k].a, ax[k].b, n);
+      h.support[k] = std::min(full[k], std::max(sameFace ? held->support[k] : ax[k].b, room));
     }
     const Real g = std::min(boxGapAt(f, cp, box, n, h, 0), boxGapAt(f, cp, box, n, h, 1));
-    if (g > best) best = g, c.normal = n, c.support[0] = h.support[0], c.support[1] = h.support[1];
+    if (g > best) {
+      best = g, c.normal = n, c.support[0] = h.support[0], c.support[1] = h.support[1];
+      heldBack[0] = full[0] - h.support[0], heldBack[1] = full[1] - h.support[1];
+    }
   }
   c.localNormal = box.axes.transpose() * c.normal;
   int count = 0;
   for (int k = 0; k < 2; ++k) {
     c.s = k;
+    c.held = heldBack[k];
     c.gap = boxGapAt(f, cp, box, c.normal, c, k);
     // On the line through the node along n (the support is held: the arm of the body's row is then
     // exactly the gradient of g in the body's rotation).

@@ -1,6 +1,7 @@
 // Collision handling: bound functor, colliders, flattening, impulses (conservation laws, Eq. 5),
 // non-penetration, moving test against tunnelling, bad input, state files with sections.
 #include "bound/CPBound.hpp"
+#include "body_util.hpp"
 #include "chain_util.hpp"
 #include "engine/FabricEngine.hpp"
 #include "geom/CPContact.hpp"
@@ -293,6 +294,51 @@ TEST(Flattening, CrossingRoundYarnsFlattenToTheGapAndLockAtTheMCD) {
       else EXPECT_NEAR(left, 2 * r0 * (1 - p.mcd) - g0, 1e-9 * r0);  // what the MCD leaves to the impulses
     }
   }
+}
+
+// A projectile pressing round sections flattens them as a yarn does (paper Sec. 5.1 steps 1-3 for
+// any two colliding OBBs; model Gap): a ball resting over a node, a cube's face over a whole yarn,
+// each overlapping the round sections by r0 eps, nothing moving. Closed form: the pressed nodes flatten to eps
+// (b = r0 (1 - eps) meets the body), or lock at the MCD and leave r0 (eps - MCD) to the impulses.
+// The paper's model keeps its own response: its body contacts flatten nothing.
+TEST(Flattening, AProjectilePressingRoundSectionsFlattensThemToItsSurface) {
+  const Real r0 = 1e-4, l0 = 2e-4;
+  for (ContactModel model : {ContactModel::Gap, ContactModel::Paper})
+    for (int shape : {0, 1})          // ball over node 2, cube over the yarn
+      for (Real eps : {0.4, 0.7}) {   // free, or past the MCD 0.6
+        Fabric f;
+        f.addYarn(line(0, 0, 4, l0), km2Material(), roundSection(r0));
+        FabricEngine e(std::move(f));
+        ContactParams p;
+        p.model = model;
+        e.enableCollisions(p, BroadPhase::Grid);
+        for (Index k = 0; k < 5; ++k) e.dynamics().fix(k);
+        // The body's lowest point r0 (1 - eps) above the axis; the ball (radius r0) clears nodes 1
+        // and 3, the cube's face (2 mm wide) covers the yarn.
+        const Real top = r0 * (1 - eps), R = shape == 0 ? r0 : 1e-3;
+        e.collisions()->bodies.push_back(shape == 0 ? ball(R, 0, Vec3(0, 0, top + R), Vec3::Zero())
+                                                    : cube(R, 0, Vec3(0, 0, top + R), Vec3::Zero()));
+        e.step(1e-9);
+        const CollisionStats& st = e.collisions()->stats;
+        const Fabric& g = e.fabric();
+        const std::string what = std::string(shape == 0 ? "ball" : "cube") + " eps " + std::to_string(eps) +
+                                 (model == ContactModel::Gap ? " gap" : " paper");
+        if (model == ContactModel::Paper) {
+          for (Index k = 0; k < 5; ++k) EXPECT_EQ(g.secFlat[k], 0) << what;
+          continue;
+        }
+        for (Index k = 0; k < 5; ++k) {
+          // The ball's two contacts measure at node 2, as the ends of CPs 1 and 2; each CP's nodes
+          // give the same share of what they have left (flattenAt, as for yarn pairs): nodes 1-3.
+          if (shape == 0 && (k == 0 || k == 4)) {
+            EXPECT_EQ(g.secFlat[k], 0) << what << " node " << k;
+            continue;
+          }
+          EXPECT_NEAR(g.secFlat[k], std::min(eps, p.mcd), 1e-9) << what << " node " << k;
+          EXPECT_NEAR(std::abs(g.secDir[k].z()), 1, 1e-12) << what << " node " << k;  // along the normal
+        }
+        EXPECT_NEAR(st.bodyPenetration, r0 * std::max(Real(0), eps - p.mcd), 1e-9 * r0) << what;
+      }
 }
 
 TEST(CollisionParams, BadInputNamesTheParameter) {
