@@ -41,6 +41,9 @@ struct BodyContact {
   /// into the body than the held ones the gap is measured with (CPContact::hHeld's rule); the
   /// flattening passes must take it before the gap can grow.
   Real held = 0;
+  /// Sphere form: -1, the contact is at the centre's place along the CP; 0 or 1, at that end node
+  /// (the section there, as a circle of its half-thickness: GapFunction.cpp, bodyGap).
+  std::int8_t end = -1;
 };
 
 /// Contact of CP `cp` (box `cpBox`, the bound functor's OBB) with part `part` of `body` within the

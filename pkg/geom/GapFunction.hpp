@@ -33,7 +33,10 @@
 //          of the CP's elliptic section at s* (c's place along the axis); n = (c - P)/|c - P| is the
 //          ellipse's surface normal at P; beyond an end of the CP, within the section's outline, P
 //          is on the flat end face. dg/dx_k = -w_k n, dg/dc = n (body rows: v + w x (c - x_G));
-//          on an end face the turn of the axis is left out of the row.
+//          on an end face the turn of the axis is left out of the row. Where an end node's section
+//          (a circle of its half-thickness) leaves less gap than the section at s*, a second
+//          contact holds that node (s = 0 or 1 kept): a CP along the sphere meets it at its
+//          thickest section, not at c's place.
 //   Box    a CP and a box part, n the separating-axis normal of the two boxes (held for the step):
 //          one contact per end section k: g_k = min over the box of y.n - (x_k.n + support_k(n)),
 //          the box's lowest point along n minus the section's deepest point; n the box face normal
@@ -103,7 +106,8 @@ void capMeasure(CPContact& c, Real remembered);
 /// hA, hB (held) or, with `sections`, supports measured again (after flattening). This is g(x).
 void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections, const Vec3Array* tangent = nullptr);
 
-/// CP-body contacts of the gap model in out[] (the sphere form: 1; the box form: one per end section
+/// CP-body contacts of the gap model in out[] (the sphere form: 1, or 2 with an end node's; the box
+/// and cylinder forms: one per end section
 /// that can touch), each listed when g <= margin + dt (the body's speed at the point + the CP's
 /// fastest node): a speculative contact, whose row lets the pair close exactly its gap.
 /// `held` (may be null) is the same CP and part's contact of the last step: the sections' measure
