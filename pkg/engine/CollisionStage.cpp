@@ -27,10 +27,12 @@ inline double since(Clock::time_point& t) {
 inline bool lockedCP(const Fabric& f, Index e, Real mcd) {
   return f.secFlat[f.elem0[e]] >= mcd && f.secFlat[f.elem0[e] + 1] >= mcd;
 }
-// A body contact's key: its CP, body and part.
-inline std::uint64_t bodyKey(Index cp, int body, int part) {
-  return (static_cast<std::uint64_t>(cp) << 32) | (static_cast<std::uint64_t>(body & 0xffff) << 16) |
-         static_cast<std::uint64_t>(part & 0xffff);
+// A body contact's key: its CP, body, part and end (BodyContact::end; -1: the sphere's own place,
+// or a box or cylinder contact). Only a contact of the same key is its memory: a sphere's contact
+// held at an end node measures that node's section, not the section at the centre's place.
+inline std::uint64_t bodyKey(Index cp, int body, int part, int end) {
+  return (static_cast<std::uint64_t>(cp) << 32) | (static_cast<std::uint64_t>(body & 0x3fff) << 18) |
+         (static_cast<std::uint64_t>(part & 0xffff) << 2) | static_cast<std::uint64_t>(end + 1);
 }
 }  // namespace
 
@@ -336,7 +338,7 @@ void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
   heldFor_ = bodies.size(), forgetHeld_ = false;
   heldKeys_.clear();
   for (std::size_t q = 0; q < heldBody_.size(); ++q)
-    heldKeys_.emplace_back(bodyKey(heldBody_[q].cp, heldBody_[q].body, heldBody_[q].part), q);
+    heldKeys_.emplace_back(bodyKey(heldBody_[q].cp, heldBody_[q].body, heldBody_[q].part, heldBody_[q].end), q);
   std::sort(heldKeys_.begin(), heldKeys_.end());
   bodyContacts_.clear();
   bodyPairs_.clear();
@@ -358,8 +360,8 @@ void CollisionStage::measureBodies(const Fabric& f, Real dt) {
     const BodyContact* held = nullptr;
     if (gapModel) {
       const auto it = std::lower_bound(heldKeys_.begin(), heldKeys_.end(),
-                                       std::make_pair(bodyKey(pc.cp, pc.body, pc.part), std::size_t(0)));
-      if (it != heldKeys_.end() && it->first == bodyKey(pc.cp, pc.body, pc.part)) held = &heldBody_[it->second];
+                                       std::make_pair(bodyKey(pc.cp, pc.body, pc.part, -1), std::size_t(0)));
+      if (it != heldKeys_.end() && it->first == bodyKey(pc.cp, pc.body, pc.part, -1)) held = &heldBody_[it->second];
     }
     const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin + projected, params_.rule, c,
                                      &tangent_, held)
