@@ -348,7 +348,8 @@ void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
 }
 
 // The body contacts of the candidates (bodyPairs_) with the sections as they stand, each with the
-// last step's contact of its CP, body and part (heldBody_) as its measure memory.
+// last step's contact of its CP, body and part (heldBody_; a sphere's at the centre's place, not an
+// end node's) as its measure memory.
 void CollisionStage::measureBodies(const Fabric& f, Real dt) {
   bodyContacts_.clear();
   BodyContact c[2];

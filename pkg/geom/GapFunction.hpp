@@ -24,11 +24,11 @@
 // Measure memory (capMeasure): the sections' measure h_A + h_B is a state (their turn, flattening
 // and the crossing angle), not moved by forces; between steps it may grow only into room the axes
 // leave, never into an overlap (a pair new to the broad phase, or a point far from the last step's,
-// claims its half-thicknesses at most), and a body contact's sections likewise (what that holds
-// back, BodyContact::held, the flattening passes take first: a projectile flattens the sections it
-// presses as a yarn does, paper Sec. 5.1). What the cap holds
-// back (CPContact::hHeld) must flatten first, and held sections are not counted on to flatten. Without it, kinked chains after breaks turned sections'
-// widths onto their neighbours by 200 um a step and the projection pushed on phantom overlaps.
+// claims its half-thicknesses at most), and a body contact's sections likewise. What the cap holds
+// back (CPContact::hHeld, BodyContact::held) must flatten first (a projectile flattens the sections
+// it presses as a yarn does, paper Sec. 5.1), and held sections are not counted on to flatten.
+// Without it, kinked chains after breaks turned sections' widths onto their neighbours by 200 um a
+// step and the projection pushed on phantom overlaps.
 //   Sphere a CP and a sphere part of centre c, radius R: g = |c - P| - R, P the closest point to c
 //          of the CP's elliptic section at s* (c's place along the axis); n = (c - P)/|c - P| is the
 //          ellipse's surface normal at P; beyond an end of the CP, within the section's outline, P

@@ -298,9 +298,9 @@ TEST(Flattening, CrossingRoundYarnsFlattenToTheGapAndLockAtTheMCD) {
 
 // A projectile pressing round sections flattens them as a yarn does (paper Sec. 5.1 steps 1-3 for
 // any two colliding OBBs; model Gap): a ball resting over a node, a cube's face over a whole yarn,
-// each overlapping the round sections by r0 eps, nothing moving. Closed form: the pressed nodes flatten to eps
-// (b = r0 (1 - eps) meets the body), or lock at the MCD and leave r0 (eps - MCD) to the impulses.
-// The paper's model keeps its own response: its body contacts flatten nothing.
+// each overlapping the round sections by r0 eps, nothing moving. Closed form: the pressed nodes
+// flatten to eps (b = r0 (1 - eps) meets the body), or lock at the MCD and leave r0 (eps - MCD) to
+// the impulses. The paper's model keeps its own response: its body contacts flatten nothing.
 TEST(Flattening, AProjectilePressingRoundSectionsFlattensThemToItsSurface) {
   const Real r0 = 1e-4, l0 = 2e-4;
   for (ContactModel model : {ContactModel::Gap, ContactModel::Paper})
