@@ -1,7 +1,7 @@
 # Contact sweep: how far yarns and projectiles overlap across the ballistic scenes the contact model
 # must hold (docs/collisions.md, "Where the model stops being right"): cubes and spheres of 1.5, 3
 # and 6 mm at 50 to 1000 m/s, 1, 2 and 4 CPs per crossing, 12.7 and 50.8 mm plies, breakage on.
-#   yade -n -x scripts/contact_sweep.py [quick=0] [jobs=1] [contact_model=gap] [out=DIR]
+#   yade -n -x scripts/contact_sweep.py [quick=0] [cp4_tail=0] [jobs=1] [contact_model=gap] [out=DIR]
 # Each scene is one `scripts/ballistic.py` run (woven.campaign runs them: jobs at once, resumable, a
 # complete run is not redone). Projectiles are steel (7850 kg/m^3) of the given size.
 # Output (out/contact_sweep/): runs/*/, sweep.csv, summary.json with, per scene, the largest
@@ -23,6 +23,8 @@ from woven.output import atomic_open, out_dir, write_summary
 
 p = read_params({
     'quick': (False, '', '1: six scenes of the 12.7 mm ply (about a minute of runs); 0: the whole matrix (30 scenes)'),
+    'cp4_tail': (False, '', '1: also 24 impacts at 4 CPs per span on the 12.7 mm ply (cube and sphere of 3, 4.5 and 6 mm at '
+                 '100, 300, 600 and 900 m/s), where the overlaps after the breaks are largest (docs/collisions.md)'),
     'jobs': (1, '', 'runs at once, in [1, 64]'),
     'contact_model': ('gap', '', "'gap' (default) or 'paper': the contact model of every run"),
     'friction': (0.0, '', 'Coulomb coefficient between yarns of every run, in [0, 2]'),
@@ -77,6 +79,10 @@ if p.quick:
     runs = [r for r in runs if r['name'] in (
         'box1.5-V1000-cp1-ply12.7', 'box3.0-V0400-cp4-ply12.7', 'box6.0-V0200-cp4-ply12.7',
         'sphere1.5-V0400-cp4-ply12.7', 'sphere3.0-V0050-cp2-ply12.7', 'sphere6.0-V1000-cp2-ply12.7')]
+if p.cp4_tail:
+    for shape in ('box', 'sphere'):
+        for size in (3.0, 4.5, 6.0):
+            runs += [scene(shape, size, V, 4, 12.7) for V in (100, 300, 600, 900)]
 
 t0 = time.time()
 script = os.path.join(os.path.dirname(os.path.abspath(sys.argv[0])), 'ballistic.py')  # under yade -x, __file__ is yade's

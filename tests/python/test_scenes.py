@@ -42,7 +42,8 @@ def test_weave_script(tmp_path):
 @pytest.mark.parametrize('script, arg, name', [('smith.py', 'colour=red', 'colour'), ('smith.py', 'V=-3', 'V'),
                                                ('weave.py', 'pattern=zigzag', 'pattern'),
                                                ('tension.py', 'friction=3', 'friction'),
-                                               ('tension.py', 'body_friction=-1', 'body_friction')])
+                                               ('tension.py', 'body_friction=-1', 'body_friction'),
+                                               ('contact_sweep.py', 'jobs=0', 'jobs')])
 def test_bad_key_fails_with_its_name(tmp_path, script, arg, name):
     rc, log, s = run_scene(script, tmp_path, arg)
     assert rc != 0 and name in log and 'allowed' in log
