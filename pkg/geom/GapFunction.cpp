@@ -444,6 +444,12 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
     Real least = c.gap;
     for (int k2 = 0; k2 < 2; ++k2) {
       if (c.s == k2) continue;  // c's place is this end already
+      // The node's disk of radius b lies within b of the node: an end farther than that from
+      // leaving less gap needs no section or ellipse (most candidates; 1 pm for the rounding).
+      const Index node = i + k2;
+      if ((centre - f.pos[node]).norm() - body.parts[part].radius - semiAxes(f.secRadius[node], f.secFlat[node], rule).b >
+          least + 1e-12)
+        continue;
       BodyContact t = c;
       const SectionAt qk = sectionAt(f, cp, k2, rule);
       t.end = static_cast<std::int8_t>(k2), t.held = 0;
