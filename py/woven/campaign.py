@@ -10,8 +10,8 @@ Every run is one process `yade -n -x scripts/ballistic.py key=value ... out=DIR`
 a run's result depends only on its keys (one thread per run: YADE without -j sets OMP_NUM_THREADS=1,
 and woven gives the same bits at any thread count anyway, docs/design.md), so the backends give the
 same summaries bit for bit. A run is complete when DIR/summary.json parses, belongs to the
-ballistic scene, holds a residual velocity and was made with the run's keys; complete runs are not
-done again (resume). The Weibull scatter of the yarn strengths is ballistic.py's `weibull_m` (the
+ballistic scene, holds a residual velocity and was made with the run's keys by this build of woven
+(the summary's `build` fingerprint); complete runs are not done again (resume). The Weibull scatter of the yarn strengths is ballistic.py's `weibull_m` (the
 modulus) and `seed` (the draw), so a seed is a specimen. SI units.
 """
 import json
@@ -59,9 +59,9 @@ def _same(a, b):
 
 
 def is_complete(run):
-    """True when run['out']/summary.json is a finished ballistic run made with run['keys'].
-    A summary written halfway (a run killed while writing), another scene's, or one made with other
-    keys does not count."""
+    """True when run['out']/summary.json is a finished ballistic run made with run['keys'] by this
+    build of woven (output.build_id). A summary written halfway (a run killed while writing),
+    another scene's, one made with other keys or by another build does not count."""
     path = os.path.join(run['out'], 'summary.json')
     try:
         with open(path) as f:
@@ -69,6 +69,9 @@ def is_complete(run):
     except (OSError, ValueError):
         return False
     if s.get('scene') != SCENE or 'residual_velocity' not in s.get('measured', {}):
+        return False
+    from .output import build_id
+    if s.get('build') != build_id():
         return False
     q = s.get('parameters', {})
     return all(k == 'out' or (k in q and _same(q[k], v)) for k, v in run['keys'].items())

@@ -6,6 +6,7 @@ target, so a failed or killed run never leaves a half-written summary.json or CS
 complete one was (state files do the same in C++, pkg/fabric/StateIO.cpp).
 """
 import contextlib
+import hashlib
 import json
 import math
 import os
@@ -137,13 +138,32 @@ def _clean(x):
     return x
 
 
+_BUILD = None
+
+
+def build_id():
+    """Fingerprint of the woven core this process runs: the first 16 hex digits of the sha256 of the
+    _woven extension. Every summary.json carries it, so a resumed campaign redoes a run that another
+    build made instead of charting its figures (after a rebuild, the same out= folder reported the
+    old contact model's overlaps as the new one's)."""
+    global _BUILD
+    if _BUILD is None:
+        from . import _woven
+        h = hashlib.sha256()
+        with open(_woven.__file__, 'rb') as f:
+            for chunk in iter(lambda: f.read(1 << 20), b''):
+                h.update(chunk)
+        _BUILD = h.hexdigest()[:16]
+    return _BUILD
+
+
 def write_summary(directory, name, params, measured, reference, units, status, checks=None, extra=None):
     """Writes DIRECTORY/summary.json and returns its dict.
 
     measured/reference: {figure: value}; units: {figure: unit}; status: 'ok', 'failed' or 'unstable';
     checks: {check: {'value':…, 'limit':…, 'passed': bool}}.
     """
-    s = {'scene': name, 'status': status,
+    s = {'scene': name, 'status': status, 'build': build_id(),
          'parameters': {k: params[k] for k in params},
          'parameter_units': dict(getattr(params, 'units', {})),
          'measured': measured, 'reference': reference, 'units': units,

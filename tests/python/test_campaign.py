@@ -207,3 +207,28 @@ def test_scheduler_address_of_a_running_cluster(local_campaign, tmp_path):
     a, b = summaries(local_campaign[0]), summaries(tmp_path)
     for name in ('V0065.0-s4', 'V0070.0-s4'):
         assert b[name]['measured']['residual_velocity'] == a[name]['measured']['residual_velocity']
+
+
+def test_a_run_made_by_another_build_is_not_complete(tmp_path):
+    """A resumed campaign takes a finished run's figures only if this build of woven made it: after a
+    rebuild the run is made again, not charted with the old core's figures. Every summary carries
+    the build's fingerprint."""
+    import woven.campaign as wc
+    import woven.output as wo
+    run = {'name': 'r', 'out': str(tmp_path), 'keys': {'V': 80.0, 'seed': 1}}
+
+    def write(build):
+        s = {'scene': 'ballistic', 'parameters': {'V': 80.0, 'seed': 1}, 'measured': {'residual_velocity': 40.0}}
+        if build is not None:
+            s['build'] = build
+        with open(tmp_path / 'summary.json', 'w') as f:
+            json.dump(s, f)
+
+    write(wo.build_id())
+    assert wc.is_complete(run)
+    write('0' * 16)
+    assert not wc.is_complete(run)
+    write(None)  # made before summaries carried it
+    assert not wc.is_complete(run)
+    s = wo.write_summary(str(tmp_path), 'x', {}, {}, {}, {}, 'ok')
+    assert s['build'] == wo.build_id() and len(s['build']) == 16

@@ -30,8 +30,8 @@ def _numbers(d, prefix=''):
     out = {}
     for k, v in d.items():
         key = prefix + k
-        if any(t in k for t in TIMING) or (isinstance(v, str) and v.startswith('/')):
-            continue  # wall-clock times and output paths differ run to run
+        if any(t in k for t in TIMING) or (isinstance(v, str) and v.startswith('/')) or key == 'build':
+            continue  # wall-clock times and output paths differ run to run; the builds compared differ
         if isinstance(v, dict):
             out.update(_numbers(v, key + '.'))
         elif isinstance(v, (int, float, str, bool)) or v is None:
