@@ -11,8 +11,9 @@ a run's result depends only on its keys (one thread per run: YADE without -j set
 and woven gives the same bits at any thread count anyway, docs/design.md), so the backends give the
 same summaries bit for bit. A run is complete when DIR/summary.json parses, belongs to the
 ballistic scene, holds a residual velocity and was made with the run's keys by this build of woven
-(the summary's `build` fingerprint); complete runs are not done again (resume). The Weibull scatter of the yarn strengths is ballistic.py's `weibull_m` (the
-modulus) and `seed` (the draw), so a seed is a specimen. SI units.
+(the summary's `build` fingerprint); complete runs are not done again (resume). The Weibull scatter
+of the yarn strengths is ballistic.py's `weibull_m` (the modulus) and `seed` (the draw), so a seed
+is a specimen. SI units.
 """
 import json
 import math
