@@ -22,6 +22,8 @@ import subprocess
 import sys
 import time
 
+from .output import build_id
+
 SCENE = 'ballistic'
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -71,7 +73,6 @@ def is_complete(run):
         return False
     if s.get('scene') != SCENE or 'residual_velocity' not in s.get('measured', {}):
         return False
-    from .output import build_id
     if s.get('build') != build_id():
         return False
     q = s.get('parameters', {})
