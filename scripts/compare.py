@@ -7,6 +7,9 @@
 # Methods (docs/compare.md):
 #   impulse          woven's default: gap functions with exact-gradient impulse rows and a position
 #                    projection (contact_model=gap; docs/collisions.md), geometric flattening up to the MCD
+#   impulse_adaptive the same method at adaptive resolution (scripts/ballistic.py fine_radius): the case's
+#                    CPs per span within fine_radius of the impact point, 1 outside, one time step for all;
+#                    fine_radius = each of `fine_radii` x the projectile's size; only at 2 CPs per span or more
 #   paper            woven as the paper: SAT normal, depth on the sections, impulses (Eq. 5) (contact_model=paper)
 #   penalty          the paper's OBB/SAT geometry, penalty forces k_p * overlap instead of impulses
 #   no_flattening    the paper's method, sections never flatten
@@ -43,7 +46,10 @@ p = read_params({
     'shape': ('sphere', '', "projectile: 'sphere' or 'box' (both models have both)"),
     'size': (3.0e-3, 'm', 'sphere diameter or cube edge'),
     'mass': (0.25e-3, 'kg', 'projectile mass'),
-    'methods': ('', '', 'comma-separated subset of impulse, paper, penalty, no_flattening, section_springs, yade_grid (default: all)'),
+    'methods': ('', '', 'comma-separated subset of impulse, impulse_adaptive, paper, penalty, no_flattening, section_springs, '
+                'yade_grid (default: all)'),
+    'fine_radii': ('1,2', '', "impulse_adaptive's fine_radius values, comma-separated multiples of the projectile's size, "
+                   'each in (0, 100]'),
     'timeout': (900, 's', 'longest a single run may take'),
     'out': ('', '', 'output folder (default out/compare)'),
 })
@@ -67,6 +73,12 @@ if p.shape not in ('sphere', 'box'):
     bad('shape', "'sphere' or 'box'")
 if not (p.size > 0 and p.mass > 0):
     bad('size' if not p.size > 0 else 'mass', '(0, inf)')
+try:
+    FINE_RADII = [float(x) for x in str(p.fine_radii).split(',') if x.strip()]
+except ValueError:
+    FINE_RADII = []
+if not FINE_RADII or not all(math.isfinite(x) and 0 < x <= 100 for x in FINE_RADII):
+    bad('fine_radii', 'comma-separated numbers in (0, 100] (multiples of the projectile size)')
 d = out_dir('compare', p)
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0])))  # yade -x sets argv[0] to this script
 side = p.side or (0.0127 if p.quick else 0.0254)
@@ -76,6 +88,8 @@ t_end = p.t_end or (15e-6 if p.quick else 30e-6)
 # Each method: its keys, the stiffness key it sweeps (None: no contact stiffness) and the values.
 METHODS = {
     'impulse': ({}, None, [None]),
+    # The swept value is fine_radius [m] (the table's 'stiffness' column stays empty for it).
+    'impulse_adaptive': ({'cp_coarse': 1}, 'fine_radius', [x * p.size for x in FINE_RADII]),
     'paper': ({'contact_model': 'paper'}, None, [None]),
     # The response and section variants stay on the paper's contact geometry they were charted with.
     'penalty': ({'contact_model': 'paper', 'response': 'penalty'}, 'penalty_stiffness', [1e5, 1e6, 1e7]),
@@ -101,6 +115,8 @@ else:
 
 
 def case_name(method, res, dt, k):
+    if method == 'impulse_adaptive':
+        return '%s_cp%d_dt%g_r%g' % (method, res, dt, k)
     return '%s_cp%d_dt%g%s' % (method, res, dt, '' if k is None else '_k%g' % k)
 
 
@@ -150,6 +166,8 @@ cases = []
 for method, (extra, kkey, ks) in METHODS.items():
     for k in STIFF_KEEP.get(method, ks):
         for res in RES:
+            if method == 'impulse_adaptive' and res < 2:  # 1 CP everywhere: the uniform case
+                continue
             for dt in DTS:
                 cases.append((method, res, dt, k))
 ref_case = ('impulse', REF_RES, min(DTS) / 2, None)
@@ -174,7 +192,9 @@ rows = []
 for c in cases:
     f = ballistic_figures(results[c])
     method, res, dt, k = c
-    row = {'method': method, 'cp_per_span': res, 'dt_over_dt_crit': dt, 'stiffness': k, 'reference': c == ref_case}
+    adaptive = method == 'impulse_adaptive'
+    row = {'method': method, 'cp_per_span': res, 'dt_over_dt_crit': dt, 'stiffness': None if adaptive else k,
+           'fine_radius': k if adaptive else None, 'reference': c == ref_case}
     if f is None:
         row.update({'status': 'crashed'})
     else:
@@ -187,7 +207,7 @@ for c in cases:
                     'dt': f['dt'], 'cps': f['cps'], 'broken': f['broken']})
     rows.append(row)
 
-COLS = ['method', 'cp_per_span', 'dt_over_dt_crit', 'stiffness', 'status', 'v_end', 'velocity_error',
+COLS = ['method', 'cp_per_span', 'dt_over_dt_crit', 'stiffness', 'fine_radius', 'status', 'v_end', 'velocity_error',
         'max_yarn_penetration', 'max_body_penetration', 'energy_error', 'wall_per_us', 'dt', 'cps', 'broken', 'reference']
 
 
@@ -197,14 +217,14 @@ def fmt(v):
 
 write_csv(os.path.join(d, 'cases.csv'), COLS, rows, 4)
 with atomic_open(os.path.join(d, 'table.md')) as f:
-    f.write('| method | CPs/span | dt/dt_crit | stiffness [N/m] | status | v_end [m/s] | velocity-drop error | '
-            'max yarn overlap [mm] | max projectile overlap [mm] | energy error | wall s / us |\n')
-    f.write('|---|---|---|---|---|---|---|---|---|---|---|\n')
+    f.write('| method | CPs/span | dt/dt_crit | stiffness [N/m] | fine radius [mm] | CPs | status | v_end [m/s] | '
+            'velocity-drop error | max yarn overlap [mm] | max projectile overlap [mm] | energy error | wall s / us |\n')
+    f.write('|---|---|---|---|---|---|---|---|---|---|---|---|---|\n')
     for r in rows:
         mm = lambda v: '' if v is None or not isinstance(v, float) else '%.3f' % (1e3 * v)  # noqa: E731
-        f.write('| %s%s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' % (
+        f.write('| %s%s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' % (
             r['method'], ' (reference)' if r['reference'] else '', r['cp_per_span'], fmt(r['dt_over_dt_crit']),
-            fmt(r['stiffness']) or '–', r['status'], fmt(r.get('v_end')),
+            fmt(r['stiffness']) or '–', mm(r['fine_radius']) or '–', fmt(r.get('cps')), r['status'], fmt(r.get('v_end')),
             '' if r.get('velocity_error') is None else '%.2f %%' % (100 * r['velocity_error']),
             mm(r.get('max_yarn_penetration')), mm(r.get('max_body_penetration')),
             '' if r.get('energy_error') is None else '%.2f %%' % (100 * r['energy_error']), fmt(r.get('wall_per_us'))))
@@ -267,8 +287,16 @@ def good(r):
     return r['status'] == 'ok' and math.isfinite(r.get('velocity_error', float('nan')))
 
 
-impulse_runs = [r for r in rows if r['method'] == 'impulse' and good(r) and not r['reference']]
+# woven's pool: the impulse method at uniform and at adaptive resolution (the same contact method,
+# fewer CPs away from the impact); the uniform cases alone give the second ratio.
+impulse_runs = [r for r in rows if r['method'] in ('impulse', 'impulse_adaptive') and good(r) and not r['reference']]
+uniform_runs = [r for r in impulse_runs if r['method'] == 'impulse']
 grid_runs = [r for r in rows if r['method'] == 'yade_grid' and good(r)]
+
+
+def name_of(r):
+    return case_name(r['method'], r['cp_per_span'], r['dt_over_dt_crit'],
+                     r['fine_radius'] if r['method'] == 'impulse_adaptive' else r['stiffness'])
 
 
 def matched(grid, pool, strict):
@@ -287,21 +315,24 @@ for g in grid_runs:
         w = matched(g, impulse_runs, strict)
         ratios.append({'grid_case': case_name('yade_grid', g['cp_per_span'], g['dt_over_dt_crit'], g['stiffness']),
                        'strict': strict, 'grid_velocity_error': g['velocity_error'], 'grid_wall_per_us': g['wall_per_us'],
-                       'woven_case': None if w is None else case_name(w['method'], w['cp_per_span'], w['dt_over_dt_crit'], w['stiffness']),
+                       'woven_case': None if w is None else name_of(w),
                        'woven_wall_per_us': None if w is None else w['wall_per_us'],
                        'speed_ratio': None if w is None else g['wall_per_us'] / w['wall_per_us']})
 best_grid = min(grid_runs, key=lambda g: g['velocity_error']) if grid_runs else None
-headline = None
+headline = headline_uniform = headline_case = None
 if best_grid is not None:
     w = matched(best_grid, impulse_runs, False)
     if w is not None:
-        headline = best_grid['wall_per_us'] / w['wall_per_us']
+        headline, headline_case = best_grid['wall_per_us'] / w['wall_per_us'], name_of(w)
+    w = matched(best_grid, uniform_runs, False)
+    if w is not None:
+        headline_uniform = best_grid['wall_per_us'] / w['wall_per_us']
 
 # --- Pareto chart ------------------------------------------------------------------------------------
 import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt
-MARK = {'impulse': ('o', 'C0'), 'paper': ('v', 'C4'), 'penalty': ('s', 'C1'), 'no_flattening': ('^', 'C2'),
+MARK = {'impulse': ('o', 'C0'), 'impulse_adaptive': ('P', 'C9'), 'paper': ('v', 'C4'), 'penalty': ('s', 'C1'), 'no_flattening': ('^', 'C2'),
         'section_springs': ('D', 'C3'), 'yade_grid': ('X', 'k')}
 fig, ax = plt.subplots(1, 3, figsize=(17, 5.2))
 panels = (('velocity_error', 'velocity-drop error vs reference', 1.0),
@@ -318,7 +349,8 @@ for a, (key, label, scale) in zip(ax, panels):
         a.scatter(x, y, marker=mk, color=colour, s=[30 + 25 * r['cp_per_span'] for r in pts], label=method,
                   facecolors='none' if method == 'yade_grid' else colour, alpha=0.85)
         for r, xi, yi in zip(pts, x, y):
-            a.annotate('%d%s' % (r['cp_per_span'], '' if r['stiffness'] is None else ' k%.0e' % r['stiffness']),
+            a.annotate('%d%s%s' % (r['cp_per_span'], '' if r['stiffness'] is None else ' k%.0e' % r['stiffness'],
+                                   '' if r['fine_radius'] is None else ' r%.1f mm' % (1e3 * r['fine_radius'])),
                        (xi, yi), fontsize=6, xytext=(3, 2), textcoords='offset points')
     a.set_xscale('log')
     a.set_yscale('log')
@@ -360,8 +392,11 @@ if p.map:
     MSCENE = {'side': 0.00635, 't_end': 8e-6, 'shape': 'sphere', 'size': 1.5e-3, 'mass': 0.05e-3,
               'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 20, 'cp_per_span': 1, 'energy_limit': 0.99,
               'overlap_limit': 100, 'pictures': 0, 'backface': 0}
+    # The adaptive method is the impulse method at another resolution: the map's scene is at 1 CP.
+    MAP_METHODS = [m for m in METHODS if m != 'impulse_adaptive']
     jobs = []
-    for method, (extra, kkey, _) in METHODS.items():
+    for method in MAP_METHODS:
+        extra, kkey, _ = METHODS[method]
         for k in (M_K.get(method, [None]) if kkey else [None]):
             for dt in M_DT:
                 for V in M_V:
@@ -415,8 +450,8 @@ if p.map:
                                                 r['why'].replace('"', "'")))
     from matplotlib.colors import ListedColormap
     cmap = ListedColormap(['#4caf50', '#ffb300', '#fb8c00', '#8e24aa', '#9e9e9e', '#d32f2f', '#000000'])
-    fig, axes = plt.subplots(len(METHODS), len(M_V), figsize=(4 * len(M_V), 2.3 * len(METHODS)), squeeze=False)
-    for i, method in enumerate(METHODS):
+    fig, axes = plt.subplots(len(MAP_METHODS), len(M_V), figsize=(4 * len(M_V), 2.3 * len(MAP_METHODS)), squeeze=False)
+    for i, method in enumerate(MAP_METHODS):
         ks = M_K.get(method, [None]) if METHODS[method][1] else [None]
         for jv, V in enumerate(M_V):
             a = axes[i][jv]
@@ -429,7 +464,7 @@ if p.map:
             a.set_xticklabels(['%g' % x for x in M_DT], fontsize=7)
             a.set_yticks(range(len(ks)))
             a.set_yticklabels(['–' if k is None else '%.0e' % k for k in ks], fontsize=7)
-            if i == len(METHODS) - 1:
+            if i == len(MAP_METHODS) - 1:
                 a.set_xlabel('dt / dt_crit')
             if jv == 0:
                 a.set_ylabel('%s\nstiffness [N/m]' % method, fontsize=8)
@@ -445,7 +480,9 @@ if p.map:
 measured = {'cases': len(rows), 'reference_case': case_name(*ref_case), 'reference_velocity_drop': dv_ref,
             'speed_ratio_at_matched_accuracy': headline,
             'speed_ratio_basis': 'YADE grid run with the smallest velocity-drop error against the fastest woven '
-                                 'impulse run at least as accurate (wall seconds per simulated us)',
+                                 'impulse run, uniform or adaptive, at least as accurate (wall seconds per simulated us)',
+            'speed_ratio_woven_case': headline_case,
+            'speed_ratio_uniform_only': headline_uniform,
             'matched_pairs': ratios,
             'best_grid_case': None if best_grid is None else case_name('yade_grid', best_grid['cp_per_span'], best_grid['dt_over_dt_crit'], best_grid['stiffness']),
             'rows': rows, 'scenes': scene_rows, 'stability': map_rows, 'wall_seconds': time.time() - t_all}
@@ -458,7 +495,9 @@ write_summary(d, 'compare', p, measured, {'speed_ratio_goal': 10.0, 'stability_e
               {'reference_velocity_drop': 'm/s', 'wall_per_us': 's/us', 'max_yarn_penetration': 'm',
                'max_body_penetration': 'm', 'velocity_error': 'fraction of the reference velocity drop',
                'energy_error': "fraction of the projectile's initial kinetic energy"}, status, checks)
-print('compare: %s; %d cases, reference velocity drop %.3f m/s; speed ratio woven/YADE grid at matched accuracy: %s; '
-      '%.0f s -> %s' % (status, len(rows), dv_ref, 'n/a' if headline is None else '%.1f' % headline, time.time() - t_all, d))
+print('compare: %s; %d cases, reference velocity drop %.3f m/s; speed ratio woven/YADE grid at matched accuracy: %s (%s; '
+      'uniform resolution only: %s); %.0f s -> %s' % (status, len(rows), dv_ref, 'n/a' if headline is None else '%.1f' % headline,
+                                                     headline_case, 'n/a' if headline_uniform is None else '%.1f' % headline_uniform,
+                                                     time.time() - t_all, d))
 if status != 'ok':
     sys.exit(1)

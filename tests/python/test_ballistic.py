@@ -202,6 +202,21 @@ def test_bench_adaptive_quick(tmp_path):
     assert set(s['checks']) == {'speedup', 'residual_velocity', 'perforated'}
 
 
+def test_bench_adaptive_passes_the_projectile_to_both_runs(tmp_path):
+    # the sphere scene of issue 12: shape, size and mass reach both ballistic.py runs
+    rc, log, s = run_scene('bench_adaptive.py', tmp_path, 'quick=1', 'cp_fine=2', 'fine_radius=3e-3', 't_end=2e-6',
+                           'shape=sphere', 'size=3e-3', 'mass=2.5e-4')
+    for run in ('uniform', 'adaptive'):
+        q = json.load(open(tmp_path / run / 'summary.json'))['parameters']
+        assert (q['shape'], q['size'], q['mass']) == ('sphere', 3e-3, 2.5e-4), q
+
+
+@pytest.mark.parametrize('arg,key', [('shape=cone', 'shape'), ('size=0.5', 'size'), ('mass=0', 'mass')])
+def test_bench_adaptive_bad_projectile_names_the_key(tmp_path, arg, key):
+    rc, log, s = run_scene('bench_adaptive.py', tmp_path, 'quick=1', arg)
+    assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log
+
+
 def test_energy_guard_refines_the_step_once_past_its_limit(yade_ns):
     # woven.energy_guard against its contract: below the limit O.dt is untouched; past it (either
     # sign) O.dt becomes safety * dt_crit once, and the factor it shrank by is returned; later calls

@@ -21,7 +21,8 @@ def test_every_method_runs_and_the_outputs_are_written(quick):
     assert rc == 0, log[-3000:]
     assert s['status'] == 'ok'
     rows = s['measured']['rows']
-    assert {r['method'] for r in rows} == {'impulse', 'paper', 'penalty', 'no_flattening', 'section_springs', 'yade_grid'}
+    assert {r['method'] for r in rows} == {'impulse', 'impulse_adaptive', 'paper', 'penalty', 'no_flattening',
+                                           'section_springs', 'yade_grid'}
     for name in ('cases.csv', 'table.md', 'scenes.md', 'pareto.png', 'stability.csv', 'stability.png'):
         assert os.path.getsize(out / name) > 100, name
     with open(out / 'cases.csv') as f:
@@ -60,6 +61,30 @@ def test_stability_map_finds_the_penalty_limit_and_the_guard(quick):
             assert c['result'] != 'blow-up', c
             checked += 1
     assert checked >= 2
+
+
+def test_adaptive_cases_coarsen_away_from_the_impact(quick):
+    out, rc, log, s = quick
+    rows = s['measured']['rows']
+    uniform = {(r['cp_per_span'], r['dt_over_dt_crit']): r for r in rows if r['method'] == 'impulse' and not r['reference']}
+    coarse = [r for r in rows if r['method'] == 'impulse' and r['cp_per_span'] == 1][0]
+    adaptive = [r for r in rows if r['method'] == 'impulse_adaptive']
+    # fine_radius = 1 and 2 projectile sizes (3 mm sphere), at 2 and 4 CPs per span only
+    assert sorted({r['fine_radius'] for r in adaptive}) == pytest.approx([3e-3, 6e-3])
+    assert {r['cp_per_span'] for r in adaptive} == {2, 4}
+    for r in adaptive:
+        # fewer CPs than the uniform case of its resolution, more than the coarse ply (a fine patch)
+        assert coarse['cps'] < r['cps'] < uniform[(r['cp_per_span'], r['dt_over_dt_crit'])]['cps'], r
+        assert r['status'] == 'ok' and r['energy_error'] < 0.01, r
+    # the headline pools both resolutions; the uniform-only ratio is never the larger
+    m = s['measured']
+    assert m['speed_ratio_woven_case'] is not None
+    assert m['speed_ratio_at_matched_accuracy'] >= m['speed_ratio_uniform_only']
+
+
+def test_bad_fine_radii_names_the_key(tmp_path):
+    rc, log, s = run_scene('compare.py', tmp_path, 'fine_radii=1,-2')
+    assert rc != 0 and 'fine_radii = ' in log and 'allowed' in log
 
 
 def test_smith_error_of_woven_chain_is_small(quick):
