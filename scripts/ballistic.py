@@ -51,6 +51,10 @@ defaults.update({
                     'the others cp_coarse; 0: the transverse wave\'s reach, U_E(V) t_end + the projectile\'s in-plane '
                     'half-diagonal (box) or radius (sphere); < 0: uniform cp_per_span'),
     'cp_coarse': (1, '', WEAVE_KEYS['cp_coarse'][2]),
+    # Multiple time stepping (FabricEngine::setSubsteps, docs/ballistic.md): O.dt = substeps x safety x
+    # dt_crit, the springs at O.dt / substeps, the contacts once per O.dt.
+    'substeps': (1, '', 'spring substeps per contact step, [1, 64] (adaptive: cp_per_span / cp_coarse meets the '
+                 'contacts at the coarse CPs\' rate); above 1 not with response penalty or flattening springs'),
 })
 for k in ('fine_x', 'fine_y'):  # the fine region is centred on the impact point, the ply's middle
     del defaults[k]
@@ -89,9 +93,9 @@ defaults.update({
     'break_filter': (-4.0, 'm', 'strain filter: tau = L / c, L = break_filter [m] if > 0, |break_filter| element lengths if < 0, 0: raw strain'),
     'weibull_m': (0.0, '', 'Weibull modulus of yarn strength (0: none; else [1, 100])'),
     'seed': (1, '', 'seed of the Weibull draw'),
-    'safety': (0.7, '', 'O.dt = safety * dt_crit'),
+    'safety': (0.7, '', 'O.dt = safety * substeps * dt_crit'),
     'energy_guard': (0.005, '', 'energy-balance error past which O.dt drops to guard_safety * dt_crit for the rest of the run, in [0, energy_limit) (0: off; woven.energy_guard)'),
-    'guard_safety': (0.0, '', 'O.dt = guard_safety * dt_crit once the guard acts, in (0, safety] (0: safety / 2, 0.35 by default)'),
+    'guard_safety': (0.0, '', 'O.dt = guard_safety * substeps * dt_crit once the guard acts, in (0, safety] (0: safety / 2, 0.35 by default)'),
     'samples': (400, '', 'rows of the time series at most'),
     'vtk_every': (0, '', 'write VTK frames every this many steps (0: first and last frame only; -1: none)'),
     'vtk_rings': (8, '', 'points per section ellipse in the VTK tubes'),
@@ -193,6 +197,10 @@ if not (math.isfinite(p.fine_radius)):
     bad('fine_radius', '[0, inf) m (0: from the transverse wave), or < 0 for uniform cp_per_span')
 if p.fine_radius >= 0 and not (1 <= p.cp_coarse <= p.cp_per_span):
     bad('cp_coarse', '[1, cp_per_span = %d] CPs between crossings outside fine_radius' % p.cp_per_span)
+if not (isinstance(p.substeps, int) and 1 <= p.substeps <= 64):
+    bad('substeps', 'an integer in [1, 64]')
+if p.substeps > 1 and (p.response == 'penalty' or p.flattening == 'springs' or p.model == 'yade'):
+    bad('substeps', "1 with response penalty, flattening springs or model yade (their forces act over one step)")
 if p.model == 'yade' and (p.plies > 1 or any(ply_angles) or p.shape in ('rcc', 'fsp') or p.yaw or p.obliquity):
     bad('model', "'woven' for packs, rcc, fsp, yaw and obliquity (model yade: one ply, a cube or a sphere, face on)")
 d = out_dir('ballistic', p)
@@ -226,6 +234,7 @@ if p.shape in ('box', 'sphere') and p.yaw == 0 and p.obliquity == 0:
     low = high = 0.5 * size
 
 O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
+eng.substeps = p.substeps
 woven.attach(eng, set_dt=True, safety=p.safety)
 every = max(1, int(math.ceil(p.t_end / O.dt)) // p.samples)
 guard = EnergyGuard(eng, p.energy_guard, p.guard_safety or 0.5 * p.safety)
@@ -427,6 +436,7 @@ measured = {
     'broken_elements': eng.broken_elements, 'broken_yarns': eng.broken_yarns,
     'first_break_time': log[0]['time'] if log else None,
     'simulated_time': O.time, 'steps': O.iter, 'dt': O.dt, 'yarns': eng.n_yarns, 'cps': eng.n_elements,
+    'dt_crit': eng.dt_crit, 'substeps': eng.substeps, 'fabric_steps': eng.iter,
     'fine_radius': weave_args['fine_radius'], 'fine_spans': w.summary['fine_spans'], 'spans': w.summary['spans'],
     'wall_seconds': wall, 'cpu_seconds': cpu, 'cp_steps_per_second': cp_steps / wall if wall > 0 else None,
     'phase_seconds': phases, 'mirror_seconds': state['mirror_seconds'],
@@ -471,7 +481,7 @@ reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-referen
 units = {'projectile_speed_end': 'm/s', 'projectile': 'kg, m, deg, kg m^2, kg/m^3, m^3, rad (chisel_angle)',
          'pack': 'J, m, deg (per_ply: energies at the end of the run; shared: entries not split by ply)',
          'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
-         'simulated_time': 's', 'dt': 's', 'fine_radius': 'm', 'wall_seconds': 's', 'cpu_seconds': 's', 'cp_steps_per_second': '1/s', 'phase_seconds': 's',
+         'simulated_time': 's', 'dt': 's', 'dt_crit': 's', 'fine_radius': 'm', 'wall_seconds': 's', 'cpu_seconds': 's', 'cp_steps_per_second': '1/s', 'phase_seconds': 's',
          'energy': 'J', 'energy_balance_error': 'fraction of the projectile\'s initial kinetic energy',
          'max_body_penetration': 'm', 'max_yarn_penetration': 'm', 'overlap': woven.overlap.UNITS, 'yarn_thickness': 'm', 'first_break_time': 's', 'mirror_seconds': 's',
          'pictures_seconds': 's'}

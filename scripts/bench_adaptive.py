@@ -3,6 +3,7 @@
 # crossing span, and adaptive (cp_fine within fine_radius of the impact point, cp_coarse outside):
 #   yade -n -x scripts/bench_adaptive.py [V=200] [cp_fine=4] [cp_coarse=1] [fine_radius=12e-3] [quick=0] [out=DIR]
 #   yade -n -x scripts/bench_adaptive.py shape=sphere size=3e-3 mass=0.25e-3 fine_radius=6e-3   # the sphere scene
+#   yade -n -x scripts/bench_adaptive.py substeps=2       # the adaptive run with 2 spring substeps per contact step
 # shape, size and mass go to both runs as ballistic.py's keys (its defaults where not given: the cube).
 # Each run is its own `yade -n -x scripts/ballistic.py` process (out/bench_adaptive/uniform, .../adaptive),
 # run one after the other; both stop at perforation. Reports both residual velocities, the scenes' wall
@@ -28,6 +29,7 @@ p = read_params({
     'side': (0.0508, 'm', 'ply side (quick=1: 0.012)'),
     't_end': (1e-4, 's', 'simulated time at most (both runs stop at perforation)'),
     'quick': (False, '', '1: a 12 mm ply, for a fast check of the pipeline'),
+    'substeps': (1, '', 'spring substeps per contact step of the adaptive run (ballistic.py), [1, cp_fine]'),
     'shape': ('box', '', "projectile, as ballistic.py: 'box', 'sphere', 'rcc' or 'fsp'"),
     'size': (5.59e-3, 'm', "cube edge or sphere diameter, as ballistic.py (given only when set here)"),
     'mass': (1.1e-3, 'kg', 'projectile mass, as ballistic.py (given only when set here)'),
@@ -39,6 +41,8 @@ if not (1 <= p.cp_coarse <= p.cp_fine):
     raise ValueError('cp_coarse = %r is invalid: allowed [1, cp_fine = %d]' % (p.cp_coarse, p.cp_fine))
 if not p.fine_radius >= 0:
     raise ValueError('fine_radius = %r is invalid: allowed [0, inf) m' % p.fine_radius)
+if not (isinstance(p.substeps, int) and 1 <= p.substeps <= p.cp_fine):
+    raise ValueError('substeps = %r is invalid: allowed an integer in [1, cp_fine = %d]' % (p.substeps, p.cp_fine))
 if p.shape not in ('box', 'sphere', 'rcc', 'fsp'):
     raise ValueError("shape = %r is invalid: allowed 'box', 'sphere', 'rcc' or 'fsp'" % (p.shape,))
 if not 1e-4 <= p.size <= 0.1:
@@ -51,7 +55,7 @@ here = os.path.dirname(os.path.abspath(sys.argv[0]))  # under yade -x, __file__ 
 common = ['V=%r' % p.V, 'side=%r' % side, 't_end=%r' % p.t_end, 'cp_per_span=%d' % p.cp_fine,
           'vtk_every=-1', 'progress=0', 'shape=%s' % p.shape] + ['%s=%r' % (k, p[k]) for k in ('size', 'mass') if k in p.given]
 runs = {'uniform': ['fine_radius=-1'],
-        'adaptive': ['fine_radius=%r' % p.fine_radius, 'cp_coarse=%d' % p.cp_coarse]}
+        'adaptive': ['fine_radius=%r' % p.fine_radius, 'cp_coarse=%d' % p.cp_coarse, 'substeps=%d' % p.substeps]}
 res = {}
 for name, extra in runs.items():
     sub = os.path.join(d, name)

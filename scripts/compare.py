@@ -10,6 +10,9 @@
 #   impulse_adaptive the same method at adaptive resolution (scripts/ballistic.py fine_radius): the case's
 #                    CPs per span within fine_radius of the impact point, 1 outside, one time step for all;
 #                    fine_radius = each of `fine_radii` x the projectile's size; only at 2 CPs per span or more
+# Both impulse methods also run with spring substeps (ballistic.py `substeps`, multiple time stepping):
+# s = 2, 4 up to the case's CPs per span, the contacts then once per s spring steps (s = CPs per span:
+# at the rate of a 1-CP ply).
 #   paper            woven as the paper: SAT normal, depth on the sections, impulses (Eq. 5) (contact_model=paper)
 #   penalty          the paper's OBB/SAT geometry, penalty forces k_p * overlap instead of impulses
 #   no_flattening    the paper's method, sections never flatten
@@ -106,6 +109,7 @@ DT_KEY = {'yade_grid': 'dt_factor'}  # the others: 'safety' (fraction of the cha
 SCENE = {'side': side, 't_end': t_end, 'V': p.V, 'shape': p.shape, 'size': p.size, 'mass': p.mass,
          'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 50, 'energy_limit': 0.99, 'overlap_limit': 100,
          'pictures': 0, 'backface': 0}  # the method's time, not the pictures' frames and back-face measures
+SUBSTEPS = [1, 2, 4]  # of the impulse methods, each s <= the case's CPs per span
 if p.quick:
     RES, DTS, REF_RES = [1, 2, 4], [0.7], 4
     STIFF_KEEP = {'penalty': [1e6], 'section_springs': [1e4], 'yade_grid': [1e6, 1e7]}
@@ -114,17 +118,20 @@ else:
     STIFF_KEEP = {}
 
 
-def case_name(method, res, dt, k):
+def case_name(method, res, dt, k, sub=1):
+    tail = '' if sub == 1 else '_s%d' % sub
     if method == 'impulse_adaptive':
-        return '%s_cp%d_dt%g_r%g' % (method, res, dt, k)
-    return '%s_cp%d_dt%g%s' % (method, res, dt, '' if k is None else '_k%g' % k)
+        return '%s_cp%d_dt%g_r%g%s' % (method, res, dt, k, tail)
+    return '%s_cp%d_dt%g%s%s' % (method, res, dt, '' if k is None else '_k%g' % k, tail)
 
 
-def keys_of(method, res, dt, k):
+def keys_of(method, res, dt, k, sub=1):
     extra, kkey, _ = METHODS[method]
     q = dict(SCENE)
     q.update(extra)
     q['cp_per_span'] = res
+    if sub > 1:
+        q['substeps'] = sub
     q[DT_KEY.get(method, 'safety')] = dt
     if kkey is not None:
         q[kkey] = k
@@ -168,9 +175,12 @@ for method, (extra, kkey, ks) in METHODS.items():
         for res in RES:
             if method == 'impulse_adaptive' and res < 2:  # 1 CP everywhere: the uniform case
                 continue
-            for dt in DTS:
-                cases.append((method, res, dt, k))
-ref_case = ('impulse', REF_RES, min(DTS) / 2, None)
+            for sub in (SUBSTEPS if method in ('impulse', 'impulse_adaptive') else [1]):
+                if sub > res:
+                    continue
+                for dt in DTS:
+                    cases.append((method, res, dt, k, sub))
+ref_case = ('impulse', REF_RES, min(DTS) / 2, None, 1)
 cases.insert(0, ref_case)
 t_all = time.time()
 results = {}
@@ -191,9 +201,9 @@ dv_ref = p.V - ref['v_end']
 rows = []
 for c in cases:
     f = ballistic_figures(results[c])
-    method, res, dt, k = c
+    method, res, dt, k, sub = c
     adaptive = method == 'impulse_adaptive'
-    row = {'method': method, 'cp_per_span': res, 'dt_over_dt_crit': dt, 'stiffness': None if adaptive else k,
+    row = {'method': method, 'cp_per_span': res, 'dt_over_dt_crit': dt, 'substeps': sub, 'stiffness': None if adaptive else k,
            'fine_radius': k if adaptive else None, 'reference': c == ref_case}
     if f is None:
         row.update({'status': 'crashed'})
@@ -207,7 +217,7 @@ for c in cases:
                     'dt': f['dt'], 'cps': f['cps'], 'broken': f['broken']})
     rows.append(row)
 
-COLS = ['method', 'cp_per_span', 'dt_over_dt_crit', 'stiffness', 'fine_radius', 'status', 'v_end', 'velocity_error',
+COLS = ['method', 'cp_per_span', 'dt_over_dt_crit', 'substeps', 'stiffness', 'fine_radius', 'status', 'v_end', 'velocity_error',
         'max_yarn_penetration', 'max_body_penetration', 'energy_error', 'wall_per_us', 'dt', 'cps', 'broken', 'reference']
 
 
@@ -217,13 +227,13 @@ def fmt(v):
 
 write_csv(os.path.join(d, 'cases.csv'), COLS, rows, 4)
 with atomic_open(os.path.join(d, 'table.md')) as f:
-    f.write('| method | CPs/span | dt/dt_crit | stiffness [N/m] | fine radius [mm] | CPs | status | v_end [m/s] | '
+    f.write('| method | CPs/span | dt/dt_crit | substeps | stiffness [N/m] | fine radius [mm] | CPs | status | v_end [m/s] | '
             'velocity-drop error | max yarn overlap [mm] | max projectile overlap [mm] | energy error | wall s / us |\n')
-    f.write('|---|---|---|---|---|---|---|---|---|---|---|---|---|\n')
+    f.write('|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n')
     for r in rows:
         mm = lambda v: '' if v is None or not isinstance(v, float) else '%.3f' % (1e3 * v)  # noqa: E731
-        f.write('| %s%s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' % (
-            r['method'], ' (reference)' if r['reference'] else '', r['cp_per_span'], fmt(r['dt_over_dt_crit']),
+        f.write('| %s%s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' % (
+            r['method'], ' (reference)' if r['reference'] else '', r['cp_per_span'], fmt(r['dt_over_dt_crit']), r['substeps'],
             fmt(r['stiffness']) or '–', mm(r['fine_radius']) or '–', fmt(r.get('cps')), r['status'], fmt(r.get('v_end')),
             '' if r.get('velocity_error') is None else '%.2f %%' % (100 * r['velocity_error']),
             mm(r.get('max_yarn_penetration')), mm(r.get('max_body_penetration')),
@@ -287,16 +297,17 @@ def good(r):
     return r['status'] == 'ok' and math.isfinite(r.get('velocity_error', float('nan')))
 
 
-# woven's pool: the impulse method at uniform and at adaptive resolution (the same contact method,
-# fewer CPs away from the impact); the uniform cases alone give the second ratio.
+# woven's pool: the impulse method at uniform and at adaptive resolution, with and without spring
+# substeps (the same contact method; fewer CPs away from the impact, fewer contact passes); the
+# uniform cases without substeps alone give the second ratio (the measure before either).
 impulse_runs = [r for r in rows if r['method'] in ('impulse', 'impulse_adaptive') and good(r) and not r['reference']]
-uniform_runs = [r for r in impulse_runs if r['method'] == 'impulse']
+uniform_runs = [r for r in impulse_runs if r['method'] == 'impulse' and r['substeps'] == 1]
 grid_runs = [r for r in rows if r['method'] == 'yade_grid' and good(r)]
 
 
 def name_of(r):
     return case_name(r['method'], r['cp_per_span'], r['dt_over_dt_crit'],
-                     r['fine_radius'] if r['method'] == 'impulse_adaptive' else r['stiffness'])
+                     r['fine_radius'] if r['method'] == 'impulse_adaptive' else r['stiffness'], r['substeps'])
 
 
 def matched(grid, pool, strict):
@@ -349,8 +360,9 @@ for a, (key, label, scale) in zip(ax, panels):
         a.scatter(x, y, marker=mk, color=colour, s=[30 + 25 * r['cp_per_span'] for r in pts], label=method,
                   facecolors='none' if method == 'yade_grid' else colour, alpha=0.85)
         for r, xi, yi in zip(pts, x, y):
-            a.annotate('%d%s%s' % (r['cp_per_span'], '' if r['stiffness'] is None else ' k%.0e' % r['stiffness'],
-                                   '' if r['fine_radius'] is None else ' r%.1f mm' % (1e3 * r['fine_radius'])),
+            a.annotate('%d%s%s%s' % (r['cp_per_span'], '' if r['stiffness'] is None else ' k%.0e' % r['stiffness'],
+                                     '' if r['fine_radius'] is None else ' r%.1f mm' % (1e3 * r['fine_radius']),
+                                     '' if r['substeps'] == 1 else ' s%d' % r['substeps']),
                        (xi, yi), fontsize=6, xytext=(3, 2), textcoords='offset points')
     a.set_xscale('log')
     a.set_yscale('log')
@@ -480,7 +492,8 @@ if p.map:
 measured = {'cases': len(rows), 'reference_case': case_name(*ref_case), 'reference_velocity_drop': dv_ref,
             'speed_ratio_at_matched_accuracy': headline,
             'speed_ratio_basis': 'YADE grid run with the smallest velocity-drop error against the fastest woven '
-                                 'impulse run, uniform or adaptive, at least as accurate (wall seconds per simulated us)',
+                                 'impulse run, uniform or adaptive, with or without spring substeps, at least as accurate '
+                                 '(wall seconds per simulated us)',
             'speed_ratio_woven_case': headline_case,
             'speed_ratio_uniform_only': headline_uniform,
             'matched_pairs': ratios,

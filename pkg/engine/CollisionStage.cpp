@@ -521,7 +521,13 @@ Real CollisionStage::addSectionSprings(const Fabric& f) {
   return energy;
 }
 
-Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
+bool CollisionStage::impulsesOnly() const {
+  return params_.response != Response::Penalty && params_.flattening != Flattening::Springs;
+}
+
+Real CollisionStage::beforeDrift(Fabric& f, Real dt, Real horizon) {
+  if (horizon != dt && !impulsesOnly())
+    throw ParameterError("substeps", "more than 1", "1 with response penalty or flattening springs (forces act over one step)");
   const ThreadCountScope threadCount(params_.threads);
   auto t = Clock::now();
   for (const RigidBody& b : bodies) b.validate();
@@ -529,14 +535,14 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   const bool flattens = params_.flattening != Flattening::None;
   const bool penalty = params_.response == Response::Penalty;
   if (springs) restoreSections(f);
-  refit(f, dt);
+  refit(f, horizon);
   stats.seconds[0] += since(t);
   if (params_.yarnContacts) broad(f);
   else pairs_.clear();
   stats.seconds[1] += since(t);
-  if (params_.yarnContacts) narrow(f, dt);
+  if (params_.yarnContacts) narrow(f, horizon);
   else contacts_.clear();
-  narrowBodies(f, dt);
+  narrowBodies(f, horizon);
   stats.seconds[2] += since(t);
 
   stats.candidates = static_cast<long>(pairs_.size());
@@ -544,7 +550,7 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   stats.moving = 0;
   for (const CPContact& c : contacts_) stats.moving += c.time > 0;
   stats.flattened = 0;
-  stats.flattenPasses = flattens ? flatten(f, params_.flattenPasses, dt) : 0;
+  stats.flattenPasses = flattens ? flatten(f, params_.flattenPasses, horizon) : 0;
   // Overlap after flattening (what neither flattening took nor the last projection removed): its
   // largest and mean values over the contacts in overlap, and sums for the mean over time.
   stats.penetration = 0;
@@ -562,7 +568,7 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   stats.correctionEnergy = 0;
   Real added = 0;
   if (!penalty) {
-    law_.resolve(f, contacts_, capacityOf(f), dt, params_, stats.impulses, bodyContacts_, &bodies);
+    law_.resolve(f, contacts_, capacityOf(f), dt, params_, stats.impulses, bodyContacts_, &bodies, horizon);
     bodyWork_ += stats.impulses.bodyWork;
     frictionWork_ += stats.impulses.frictionWork;
     added += stats.impulses.energyChange;
@@ -608,11 +614,11 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt) {
   return added + stats.correctionEnergy;
 }
 
-Real CollisionStage::afterDrift(Fabric& f, Real dt) {
+Real CollisionStage::afterDrift(Fabric& f, Real dt, Real horizon) {
   const ThreadCountScope threadCount(params_.threads);
   for (RigidBody& b : bodies) {
-    b.pos += dt * b.vel;
-    const Real angle = b.angVel.norm() * dt;  // YADE's rotation of a spherical body over the step
+    b.pos += horizon * b.vel;
+    const Real angle = b.angVel.norm() * horizon;  // YADE's rotation of a spherical body over the step
     if (angle > 0) b.ori = (Quat(Eigen::AngleAxis<Real>(angle, b.angVel.normalized())) * b.ori).normalized();
   }
   if (params_.response == Response::Penalty) return 0;

@@ -79,10 +79,19 @@ class CollisionStage : public StepHook {
 
   /// One collision pass (the StepHook of ChainDynamics). Returns the energy the impulses and the
   /// positional correction added [J].
-  Real beforeDrift(Fabric& f, Real dt) override;
+  Real beforeDrift(Fabric& f, Real dt) override { return beforeDrift(f, dt, dt); }
   /// Drifts the rigid bodies with their new velocities, then the restitution pass of the impulse
   /// law (nothing for e = 0).
-  Real afterDrift(Fabric& f, Real dt) override;
+  Real afterDrift(Fabric& f, Real dt) override { return afterDrift(f, dt, dt); }
+  /// The same with the fabric's substep dt (its kicks: the energy books, the projection's) apart
+  /// from the horizon, the time until the next pass, over which everything moves: the bodies'
+  /// drift, the boxes' growth, the contacts' reach, the rooms of the impulse rows (spring
+  /// substeps, FabricEngine::setSubsteps; horizon = dt without them). Force-based parts (penalty,
+  /// section springs) act over one step only: refused with horizon != dt (ParameterError "substeps").
+  Real beforeDrift(Fabric& f, Real dt, Real horizon);
+  Real afterDrift(Fabric& f, Real dt, Real horizon);
+  /// Whether the stage can run with a horizon longer than the step (no force-based parts).
+  bool impulsesOnly() const;
   /// Spring energy of the penalty contacts and section springs half way through the step's drift
   /// (law/NormalForces: the pair of the synchronised kinetic energy) [J].
   Real springEnergy() const override { return spring_; }

@@ -1,22 +1,64 @@
 #include "engine/FabricEngine.hpp"
 #include "core/Errors.hpp"
 #include <cmath>
+#include <string>
 
 namespace woven {
 
 FabricEngine::FabricEngine(Fabric fabric)
     : fabric_(std::make_unique<Fabric>(std::move(fabric))), dynamics_(*fabric_) {}
 
+namespace {
+// The collision stage seen by one substep of a step of `horizon`: its pass before the first
+// substep's drift, its projection after the last one's; the books' takes and springs every substep.
+class SubstepHook final : public StepHook {
+ public:
+  SubstepHook(CollisionStage& c, Real horizon) : c_(c), horizon_(horizon) {}
+  bool first = false, last = false;
+  Real beforeDrift(Fabric& f, Real dt) override { return first ? c_.beforeDrift(f, dt, horizon_) : 0; }
+  Real afterDrift(Fabric& f, Real dt) override { return last ? c_.afterDrift(f, dt, horizon_) : 0; }
+  Real takeBodyWork() override { return c_.takeBodyWork(); }
+  Real takeProjectionEnergy() override { return c_.takeProjectionEnergy(); }
+  Real takeFrictionWork() override { return c_.takeFrictionWork(); }
+  Real springEnergy() const override { return c_.springEnergy(); }
+
+ private:
+  CollisionStage& c_;
+  Real horizon_;
+};
+
+const char* kForcesOverOneStep = "1 with response penalty or flattening springs (their forces act over one substep)";
+}  // namespace
+
 void FabricEngine::step(Real dt) {
-  const Real dtCrit = dynamics_.criticalDt();
+  const Real dtMax = maxStep();
   // Refused before anything moves: a step above the central-difference limit grows without bound.
-  if (!(std::isfinite(dt) && dt > 0 && dt <= dtCrit * (1 + 1e-12)))  // message built only on failure
-    throw ParameterError("dt", fmt(dt), "(0, dt_crit = " + fmt(dtCrit) + "] s (stable limit of the chain; set O.dt below it)");
-  dynamics_.step(dt, collisions_.get());
+  if (!(std::isfinite(dt) && dt > 0 && dt <= dtMax * (1 + 1e-12)))  // message built only on failure
+    throw ParameterError("dt", fmt(dt), "(0, " + std::string(substeps_ > 1 ? "substeps x " : "") + "dt_crit = " + fmt(dtMax) +
+                                            "] s (stable limit of the chain; set O.dt below it)");
+  if (substeps_ == 1) return dynamics_.step(dt, collisions_.get());
+  const Real h = dt / substeps_;
+  if (!collisions_) {
+    for (int k = 0; k < substeps_; ++k) dynamics_.step(h, nullptr);
+    return;
+  }
+  SubstepHook hook(*collisions_, dt);
+  for (int k = 0; k < substeps_; ++k) {
+    hook.first = k == 0, hook.last = k == substeps_ - 1;
+    dynamics_.step(h, &hook);
+  }
+}
+
+void FabricEngine::setSubsteps(int m) {
+  if (m < 1 || m > 64) throw ParameterError("substeps", std::to_string(m), "[1, 64]");
+  if (m > 1 && collisions_ && !collisions_->impulsesOnly()) throw ParameterError("substeps", std::to_string(m), kForcesOverOneStep);
+  substeps_ = m;
 }
 
 void FabricEngine::enableCollisions(const ContactParams& p, BroadPhase broad) {
   p.validate();
+  if (substeps_ > 1 && (p.response == Response::Penalty || p.flattening == Flattening::Springs))
+    throw ParameterError("substeps", std::to_string(substeps_), kForcesOverOneStep);
   if (!collisions_) collisions_ = std::make_unique<CollisionStage>(p, broad);
   collisions_->setParams(p);
   collisions_->broadPhase = broad;

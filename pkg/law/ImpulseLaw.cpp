@@ -65,8 +65,9 @@ Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies) {
 
 void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, const Capacity& capacity, Real dt,
                          const ContactParams& p, ImpulseReport& rep, const std::vector<BodyContact>& bodyContacts,
-                         std::vector<RigidBody>* bodies) {
+                         std::vector<RigidBody>* bodies, Real horizon) {
   rep = ImpulseReport{};
+  const Real H = horizon > 0 ? horizon : dt;  // the drift the rooms are shared over
   loadBodies(bodies);
   // Which contacts need a row and their rows, each contact on its own (threads; the capacity is the
   // costly part and reads nothing the rows change); then the body rows, one by one.
@@ -85,9 +86,9 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     // Approach the room absorbs: the gap, and what flattening can still take, unless the contact is
     // still overlapping after the flattening passes (flattening has stopped working for it).
     const Real gap = contacts[c].gap;
-    Real allowed = std::max(gap, Real(0)) / dt;
+    Real allowed = std::max(gap, Real(0)) / H;
     if (r.vn0 < -allowed - p.tolerance) {  // neither separating, resting (Eq. 4), nor within the gap
-      allowed = (gap < 0 ? 0.0 : gap + capacity(contacts[c])) / dt;
+      allowed = (gap < 0 ? 0.0 : gap + capacity(contacts[c])) / H;
       if (!everyContact && !(r.vn0 < -allowed - p.tolerance)) return;  // taken up by flattening
     } else if (!everyContact) {
       return;
@@ -111,7 +112,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     r.body = c.body;
     r.arm = c.point - (*bodies)[c.body].pos;
     r.vn0 = rowVelocity(f, r).dot(r.n);
-    const Real allowed = std::max(c.gap, Real(0)) / dt;
+    const Real allowed = std::max(c.gap, Real(0)) / H;
     if (!everyContact && !(r.vn0 < -allowed - p.tolerance)) continue;
     const BodyVelocity& b = bodyVel_[c.body];
     const Vec3 rn = r.arm.cross(r.n);

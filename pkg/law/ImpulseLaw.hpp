@@ -69,10 +69,13 @@ class ImpulseLaw {
   /// that approach faster than their gap alone allows.
   using Capacity = std::function<Real(const CPContact&)>;
 
-  /// Applies the impulses to Fabric::vel (and to the bodies' vel and angVel); dt [s] the step.
+  /// Applies the impulses to Fabric::vel (and to the bodies' vel and angVel); dt [s] the step (its
+  /// half-kick: the energy books), horizon [s] the drift until the next pass, over which the rows
+  /// let a contact close by its room (dt itself, or the contact step of spring substeps:
+  /// FabricEngine::setSubsteps); 0: dt.
   void resolve(Fabric& f, const std::vector<CPContact>& contacts, const Capacity& capacity, Real dt,
                const ContactParams& p, ImpulseReport& report, const std::vector<BodyContact>& bodyContacts = {},
-               std::vector<RigidBody>* bodies = nullptr);
+               std::vector<RigidBody>* bodies = nullptr, Real horizon = 0);
 
   /// Pass 2 after the drift: restitution e of the rows of the last resolve() (see above). Returns
   /// the fabric's kinetic energy change [J] (0 for e = 0) and adds the bodies' work to *bodyWork.

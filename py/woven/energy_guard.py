@@ -6,8 +6,9 @@ error grows: a 6 mm cube at 50 m/s on the 12.7 mm ply at 4 CPs per crossing reac
 100 us at 0.7 dt_crit, 2.2 % at 0.5 and 0.35 % at 0.35. A finer step from the first break on would
 cost half again the steps of every perforating run (the default impact breaks half way through), so
 the guard refines only where the books show the drift: once the balance error passes `limit` (a
-fraction of the scene's energy scale), O.dt becomes `safety` * dt_crit for the rest of the run. The
-fabric's integrator takes the change (its kick spans half the old and half the new step).
+fraction of the scene's energy scale), O.dt becomes `safety` * dt_max (dt_max = substeps x dt_crit)
+for the rest of the run. The fabric's integrator takes the change (its kick spans half the old and
+half the new step).
 """
 from yade.wrapper import Omega
 
@@ -17,7 +18,7 @@ _O = Omega()
 class EnergyGuard:
     def __init__(self, engine, limit, safety):
         """engine: the woven.FabricEngine; limit: balance error that refines the step, >= 0 (0: off);
-        safety: O.dt = safety * dt_crit once refined, in (0, 1]."""
+        safety: O.dt = safety * dt_max once refined, in (0, 1]."""
         if not (0 <= limit < 1):
             raise ValueError('energy_guard = %r is invalid: allowed [0, 1) (0: off)' % (limit,))
         if not (0 < safety <= 1):
@@ -28,14 +29,14 @@ class EnergyGuard:
 
     def smallest_dt(self):
         """The smallest O.dt the run can take [s] (to size its step budget)."""
-        return min(_O.dt, self.safety * self.engine.dt_crit) if self.limit > 0 else _O.dt
+        return min(_O.dt, self.safety * self.engine.dt_max) if self.limit > 0 else _O.dt
 
     def check(self, balance):
         """Refines O.dt when |balance| passes the limit (once); returns the factor by which the step
         shrank now (1: unchanged)."""
         if self.limit <= 0 or self.refined_at is not None or not abs(balance) > self.limit:
             return 1.0
-        dt = self.safety * self.engine.dt_crit
+        dt = self.safety * self.engine.dt_max
         if dt >= _O.dt:
             self.refined_at = _O.time  # already that fine
             return 1.0

@@ -65,9 +65,10 @@ def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
     or, with the native YADE plugin installed, the yade.wrapper.WovenFabricEngine that steps it
     (woven._native; WOVEN_NATIVE=0 forces the PyRunner).
 
-    set_dt: set O.dt = safety * engine.dt_crit [s] (safety in (0, 1]; 0.7 by default because slack/taut
-            switching of tension-only yarns gains energy near dt_crit, docs/design.md); otherwise O.dt must already
-            be <= engine.dt_crit, else ValueError naming dt and the allowed range (before any step).
+    set_dt: set O.dt = safety * engine.dt_max [s] (dt_max = substeps x dt_crit; safety in (0, 1]; 0.7 by
+            default because slack/taut switching of tension-only yarns gains energy near dt_crit, docs/design.md);
+            otherwise O.dt must already be <= engine.dt_max, else ValueError naming dt and the allowed range
+            (before any step).
     label:  YADE label of the PyRunner.
     append: add to the end of O.engines (else the caller places the returned PyRunner).
     """
@@ -81,10 +82,10 @@ def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
     if isinstance(safety, bool) or not isinstance(safety, (int, float)) or not (0 < safety <= 1):
         raise ValueError('safety = %r is invalid: allowed (0, 1]' % (safety,))
     if set_dt:
-        _O.dt = safety * engine.dt_crit
-    elif not (0 < _O.dt <= engine.dt_crit * (1 + 1e-12)):
-        raise ValueError('dt = %.12g is invalid: allowed (0, dt_crit = %.12g] s (stable limit of the chain; '
-                         'set O.dt below it or attach(..., set_dt=True))' % (_O.dt, engine.dt_crit))
+        _O.dt = safety * engine.dt_max
+    elif not (0 < _O.dt <= engine.dt_max * (1 + 1e-12)):
+        raise ValueError('dt = %.12g is invalid: allowed (0, substeps x dt_crit = %.12g] s (stable limit of the chain; '
+                         'set O.dt below it or attach(..., set_dt=True))' % (_O.dt, engine.dt_max))
     # The same engine twice would step the fabric twice per YADE iteration (with YADE's O.dt each).
     native = _native.wanted()
     if native and _native.attached(engine, _O.engines) is not None:

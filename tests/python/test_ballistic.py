@@ -190,6 +190,27 @@ def test_bad_adaptive_keys_name_the_key(tmp_path, args, key):
     assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log
 
 
+@pytest.mark.parametrize('args', [['substeps=0'], ['substeps=65'], ['substeps=2', 'response=penalty'],
+                                  ['substeps=2', 'flattening=springs']])
+def test_bad_substeps_name_the_key(tmp_path, args):
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', *args)
+    assert rc != 0 and 'substeps = ' in log and 'allowed' in log
+
+
+def test_substeps_meet_the_contacts_once_per_step(tmp_path):
+    # 12.7 mm ply at 2 CPs per span, 2 substeps: YADE's step is twice the springs' (2 x 0.7 dt_crit),
+    # the run keeps its books and overlaps, and the fabric took two chain steps per YADE step.
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.0127', 'cp_per_span=2', 'substeps=2', 't_end=8e-6',
+                           'shape=sphere', 'size=2.5e-3', 'mass=6.4e-5', 'V=400', 'stop=0')
+    assert rc == 0, log[-3000:]
+    m = s['measured']
+    assert s['parameters']['substeps'] == 2 and m['substeps'] == 2
+    assert m['dt'] == pytest.approx(2 * 0.7 * m['dt_crit'], rel=1e-12)
+    assert m['fabric_steps'] == 2 * m['steps']
+    assert abs(m['energy_balance_error']) < 0.01
+    assert m['overlap']['yarn_max_rel'] < 0.1 and m['overlap']['body_max_rel'] < 0.1
+
+
 def test_bench_adaptive_quick(tmp_path):
     rc, log, s = run_scene('bench_adaptive.py', tmp_path, 'quick=1', 'cp_fine=2', 'fine_radius=3e-3')
     assert rc == 0, log

@@ -35,7 +35,8 @@ def test_reference_converges_in_the_time_step(quick):
     ref = [r for r in rows if r['reference']]
     assert len(ref) == 1 and ref[0]['velocity_error'] == 0
     # the same resolution at twice the reference's time step: within 5 % of its velocity drop
-    same = [r for r in rows if r['method'] == 'impulse' and not r['reference'] and r['cp_per_span'] == ref[0]['cp_per_span']]
+    same = [r for r in rows if r['method'] == 'impulse' and not r['reference'] and r['cp_per_span'] == ref[0]['cp_per_span']
+            and r['substeps'] == 1]
     assert same and all(r['velocity_error'] < 0.05 for r in same), same
     assert all(r['energy_error'] < 0.01 for r in rows if r['method'] == 'impulse')
 
@@ -72,7 +73,7 @@ def test_adaptive_cases_coarsen_away_from_the_impact(quick):
     # fine_radius = 1 and 2 projectile sizes (3 mm sphere), at 2 and 4 CPs per span only
     assert sorted({r['fine_radius'] for r in adaptive}) == pytest.approx([3e-3, 6e-3])
     assert {r['cp_per_span'] for r in adaptive} == {2, 4}
-    for r in adaptive:
+    for r in [r for r in adaptive if r['substeps'] == 1]:
         # fewer CPs than the uniform case of its resolution, more than the coarse ply (a fine patch)
         assert coarse['cps'] < r['cps'] < uniform[(r['cp_per_span'], r['dt_over_dt_crit'])]['cps'], r
         assert r['status'] == 'ok' and r['energy_error'] < 0.01, r
@@ -80,6 +81,22 @@ def test_adaptive_cases_coarsen_away_from_the_impact(quick):
     m = s['measured']
     assert m['speed_ratio_woven_case'] is not None
     assert m['speed_ratio_at_matched_accuracy'] >= m['speed_ratio_uniform_only']
+
+
+def test_substep_cases_meet_the_contacts_less_often(quick):
+    out, rc, log, s = quick
+    rows = s['measured']['rows']
+    for method in ('impulse', 'impulse_adaptive'):
+        runs = [r for r in rows if r['method'] == method and not r['reference']]
+        plain = {(r['cp_per_span'], r['dt_over_dt_crit'], r['fine_radius']): r for r in runs if r['substeps'] == 1}
+        sub = [r for r in runs if r['substeps'] > 1]
+        # s = 2 and 4, never more than the case's CPs per span
+        assert {r['substeps'] for r in sub} == {2, 4} and all(r['substeps'] <= r['cp_per_span'] for r in sub)
+        for r in sub:
+            q = plain[(r['cp_per_span'], r['dt_over_dt_crit'], r['fine_radius'])]
+            # the contact step (YADE's O.dt) is s times the plain case's, the ply the same
+            assert r['dt'] == pytest.approx(r['substeps'] * q['dt'], rel=1e-12) and r['cps'] == q['cps']
+            assert r['status'] == 'ok' and r['energy_error'] < 0.01, r
 
 
 def test_bad_fine_radii_names_the_key(tmp_path):
