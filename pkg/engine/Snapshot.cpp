@@ -120,6 +120,8 @@ std::string engineSnapshot(FabricEngine& e) {
   o.put(std::uint8_t(s.booksStarted)), o.put(std::uint8_t(s.springSeen)), o.put(s.books);
   o.put(s.breakage.params), o.vec(s.breakage.strength), o.vec(s.breakage.filtered);
   putBreakEvents(o, s.breakage.log);
+  // Spring substeps only when set: a snapshot of a plain engine has the bytes it had before them.
+  if (e.substeps() > 1) o.put(static_cast<std::int32_t>(e.substeps()));
   o.put(fnv64(o.b.data(), o.b.size()));
   // As saveState: both this run and the restored one test every pair at their next step.
   if (CollisionStage* c = e.collisions()) c->invalidateCache();
@@ -209,7 +211,13 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
   s.books = in.get<EnergyBooks>();
   s.breakage.params = in.get<BreakageParams>(), in.vec(s.breakage.strength), in.vec(s.breakage.filtered);
   getBreakEvents(in, s.breakage.log);
+  int substeps = 1;
+  if (in.b.size() - in.at == sizeof(std::int32_t)) {
+    substeps = in.get<std::int32_t>();
+    if (substeps < 2 || substeps > 64) In::fail("substeps outside [2, 64]");
+  }
   if (in.at != in.b.size()) In::fail("trailing bytes");
+  if (substeps > 1) e->setSubsteps(substeps);
   e->setState(s);  // checks everything (topology fingerprint, ranges) and puts clock, books, breaks back
   return e;
 }

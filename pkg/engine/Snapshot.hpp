@@ -1,5 +1,5 @@
 // Snapshot of a whole FabricEngine in memory: the fabric as built (nodes, elements, yarns, materials),
-// its loads, limits, collision settings and rigid bodies, and its state (positions, velocities,
+// its loads, limits, collision settings, spring substeps and rigid bodies, and its state (positions, velocities,
 // sections, clock, broken elements, breakage state, energy books: StateIO's KinematicState), so that
 // an engine rebuilt from the bytes continues bit for bit as the one that wrote them. The YADE plugin
 // (pkg/yade/, docs/yade_native.md) stores it in O.save's files.

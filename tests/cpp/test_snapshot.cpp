@@ -75,6 +75,23 @@ TEST(Snapshot, RestoredEngineContinuesBitForBit) {
   expectSame(*a, *c);
 }
 
+// Spring substeps are part of the engine's settings: the restored engine takes the same long
+// steps and continues bit for bit; a plain engine's bytes carry none.
+TEST(Snapshot, SubstepsRoundTrip) {
+  auto a = struckPly();
+  const std::size_t plain = engineSnapshot(*a).size();
+  a->setSubsteps(3);
+  EXPECT_EQ(engineSnapshot(*a).size(), plain + 4);
+  const Real dt = 3 * 0.7 * a->criticalDt();
+  for (int s = 0; s < 50; ++s) a->step(dt);
+  const std::string bytes = engineSnapshot(*a);
+  auto b = restoreSnapshot(bytes);
+  EXPECT_EQ(b->substeps(), 3);
+  for (int s = 0; s < 60; ++s) a->step(dt), b->step(dt);
+  EXPECT_GT(a->collisions()->stats.bodyContacts + a->dynamics().breakage().brokenElements(), 0);
+  expectSame(*a, *b);
+}
+
 TEST(Snapshot, DamagedBytesAreRefused) {
   auto a = struckPly();
   std::string bytes = engineSnapshot(*a);
