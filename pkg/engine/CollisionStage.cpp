@@ -521,13 +521,12 @@ Real CollisionStage::addSectionSprings(const Fabric& f) {
   return energy;
 }
 
-bool CollisionStage::impulsesOnly() const {
-  return params_.response != Response::Penalty && params_.flattening != Flattening::Springs;
+bool CollisionStage::impulsesOnly(const ContactParams& p) {
+  return p.response != Response::Penalty && p.flattening != Flattening::Springs;
 }
 
 Real CollisionStage::beforeDrift(Fabric& f, Real dt, Real horizon) {
-  if (horizon != dt && !impulsesOnly())
-    throw ParameterError("substeps", "more than 1", "1 with response penalty or flattening springs (forces act over one step)");
+  if (horizon != dt && !impulsesOnly(params_)) throw ParameterError("substeps", "more than 1", kSubstepsWithForces);
   const ThreadCountScope threadCount(params_.threads);
   auto t = Clock::now();
   for (const RigidBody& b : bodies) b.validate();

@@ -90,8 +90,11 @@ class CollisionStage : public StepHook {
   /// section springs) act over one step only: refused with horizon != dt (ParameterError "substeps").
   Real beforeDrift(Fabric& f, Real dt, Real horizon);
   Real afterDrift(Fabric& f, Real dt, Real horizon);
-  /// Whether the stage can run with a horizon longer than the step (no force-based parts).
-  bool impulsesOnly() const;
+  /// Whether a stage with these parameters can run with a horizon longer than the step (no
+  /// force-based parts), and the allowed range of substeps named when it cannot.
+  static bool impulsesOnly(const ContactParams& p);
+  static constexpr const char* kSubstepsWithForces =
+      "1 with response penalty or flattening springs (their forces act over one substep)";
   /// Spring energy of the penalty contacts and section springs half way through the step's drift
   /// (law/NormalForces: the pair of the synchronised kinetic energy) [J].
   Real springEnergy() const override { return spring_; }

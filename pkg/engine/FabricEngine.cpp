@@ -26,8 +26,6 @@ class SubstepHook final : public StepHook {
   CollisionStage& c_;
   Real horizon_;
 };
-
-const char* kForcesOverOneStep = "1 with response penalty or flattening springs (their forces act over one substep)";
 }  // namespace
 
 void FabricEngine::step(Real dt) {
@@ -51,14 +49,15 @@ void FabricEngine::step(Real dt) {
 
 void FabricEngine::setSubsteps(int m) {
   if (m < 1 || m > 64) throw ParameterError("substeps", std::to_string(m), "[1, 64]");
-  if (m > 1 && collisions_ && !collisions_->impulsesOnly()) throw ParameterError("substeps", std::to_string(m), kForcesOverOneStep);
+  if (m > 1 && collisions_ && !CollisionStage::impulsesOnly(collisions_->params()))
+    throw ParameterError("substeps", std::to_string(m), CollisionStage::kSubstepsWithForces);
   substeps_ = m;
 }
 
 void FabricEngine::enableCollisions(const ContactParams& p, BroadPhase broad) {
   p.validate();
-  if (substeps_ > 1 && (p.response == Response::Penalty || p.flattening == Flattening::Springs))
-    throw ParameterError("substeps", std::to_string(substeps_), kForcesOverOneStep);
+  if (substeps_ > 1 && !CollisionStage::impulsesOnly(p))
+    throw ParameterError("substeps", std::to_string(substeps_), CollisionStage::kSubstepsWithForces);
   if (!collisions_) collisions_ = std::make_unique<CollisionStage>(p, broad);
   collisions_->setParams(p);
   collisions_->broadPhase = broad;
