@@ -54,7 +54,7 @@ defaults.update({
     # Multiple time stepping (FabricEngine::setSubsteps, docs/ballistic.md): O.dt = substeps x safety x
     # dt_crit, the springs at O.dt / substeps, the contacts once per O.dt.
     'substeps': (1, '', 'spring substeps per contact step, [1, 64] (adaptive: cp_per_span / cp_coarse meets the '
-                 'contacts at the coarse CPs\' rate); above 1 not with response penalty or flattening springs'),
+                 'contacts at the coarse CPs\' rate); above 1 only with the gap model\'s impulses'),
 })
 for k in ('fine_x', 'fine_y'):  # the fine region is centred on the impact point, the ply's middle
     del defaults[k]
@@ -199,8 +199,9 @@ if p.fine_radius >= 0 and not (1 <= p.cp_coarse <= p.cp_per_span):
     bad('cp_coarse', '[1, cp_per_span = %d] CPs between crossings outside fine_radius' % p.cp_per_span)
 if not (isinstance(p.substeps, int) and 1 <= p.substeps <= 64):
     bad('substeps', 'an integer in [1, 64]')
-if p.substeps > 1 and (p.response == 'penalty' or p.flattening == 'springs' or p.model == 'yade'):
-    bad('substeps', "1 with response penalty, flattening springs or model yade (their forces act over one step)")
+if p.substeps > 1 and (p.response == 'penalty' or p.flattening == 'springs' or p.model == 'yade' or p.contact_model == 'paper'):
+    bad('substeps', "1 with response penalty, flattening springs, contact_model paper or model yade (only the gap model's "
+                    "impulses substep)")
 if p.model == 'yade' and (p.plies > 1 or any(ply_angles) or p.shape in ('rcc', 'fsp') or p.yaw or p.obliquity):
     bad('model', "'woven' for packs, rcc, fsp, yaw and obliquity (model yade: one ply, a cube or a sphere, face on)")
 d = out_dir('ballistic', p)

@@ -521,12 +521,12 @@ Real CollisionStage::addSectionSprings(const Fabric& f) {
   return energy;
 }
 
-bool CollisionStage::impulsesOnly(const ContactParams& p) {
-  return p.response != Response::Penalty && p.flattening != Flattening::Springs;
+bool CollisionStage::allowsSubsteps(const ContactParams& p) {
+  return p.model == ContactModel::Gap && p.response != Response::Penalty && p.flattening != Flattening::Springs;
 }
 
 Real CollisionStage::beforeDrift(Fabric& f, Real dt, Real horizon) {
-  if (horizon != dt && !impulsesOnly(params_)) throw ParameterError("substeps", "more than 1", kSubstepsWithForces);
+  if (horizon != dt && !allowsSubsteps(params_)) throw ParameterError("substeps", "more than 1", kSubstepsRange);
   const ThreadCountScope threadCount(params_.threads);
   auto t = Clock::now();
   for (const RigidBody& b : bodies) b.validate();
@@ -613,16 +613,39 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt, Real horizon) {
   return added + stats.correctionEnergy;
 }
 
-Real CollisionStage::afterDrift(Fabric& f, Real dt, Real horizon) {
+Real CollisionStage::resolveAgain(Fabric& f, Real dt, Real horizonLeft) {
+  if (contacts_.empty() && bodyContacts_.empty()) return 0;
+  const ThreadCountScope threadCount(params_.threads);
+  auto t = Clock::now();
+  // A contact of a CP broken since the pass gets no push: infinite room (its row stays at 0).
+  parallelFor(static_cast<Index>(contacts_.size()), 256, threads(), [&](Index k) {
+    CPContact& c = contacts_[k];
+    if (!f.alive[c.cpA] || !f.alive[c.cpB]) c.gap = INFINITY;
+    else remeasure(f, c, params_.rule, false);
+  });
+  for (BodyContact& c : bodyContacts_) {
+    if (!f.alive[c.cp]) c.gap = INFINITY;
+    else remeasureBody(f, bodies[c.body], c);
+  }
+  ImpulseReport rep;
+  law_.resolve(f, contacts_, capacityOf(f), dt, params_, rep, bodyContacts_, &bodies, horizonLeft);
+  bodyWork_ += rep.bodyWork;
+  frictionWork_ += rep.frictionWork;
+  stats.seconds[3] += since(t);
+  return rep.energyChange;
+}
+
+Real CollisionStage::afterDrift(Fabric& f, Real dt, bool restitute, bool project) {
   const ThreadCountScope threadCount(params_.threads);
   for (RigidBody& b : bodies) {
-    b.pos += horizon * b.vel;
-    const Real angle = b.angVel.norm() * horizon;  // YADE's rotation of a spherical body over the step
+    b.pos += dt * b.vel;
+    const Real angle = b.angVel.norm() * dt;  // YADE's rotation of a spherical body over the step
     if (angle > 0) b.ori = (Quat(Eigen::AngleAxis<Real>(angle, b.angVel.normalized())) * b.ori).normalized();
   }
   if (params_.response == Response::Penalty) return 0;
-  const Real dE = law_.restitute(f, params_, &bodies, &bodyWork_);
+  const Real dE = restitute ? law_.restitute(f, params_, &bodies, &bodyWork_) : 0.0;
   stats.impulses.energyChange += dE;
+  if (!project) return dE;
   stats.projection = ProjectionReport{};
   if (const int sweeps = params_.projectionSweepCount(); sweeps > 0) {
     projector_.project(f, contacts_, bodyContacts_, bodies, capacityOf(f), sweeps, params_.projectionSlop,

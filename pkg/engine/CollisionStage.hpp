@@ -82,19 +82,26 @@ class CollisionStage : public StepHook {
   Real beforeDrift(Fabric& f, Real dt) override { return beforeDrift(f, dt, dt); }
   /// Drifts the rigid bodies with their new velocities, then the restitution pass of the impulse
   /// law (nothing for e = 0).
-  Real afterDrift(Fabric& f, Real dt) override { return afterDrift(f, dt, dt); }
-  /// The same with the fabric's substep dt (its kicks: the energy books, the projection's) apart
-  /// from the horizon, the time until the next pass, over which everything moves: the bodies'
-  /// drift, the boxes' growth, the contacts' reach, the rooms of the impulse rows (spring
-  /// substeps, FabricEngine::setSubsteps; horizon = dt without them). Force-based parts (penalty,
-  /// section springs) act over one step only: refused with horizon != dt (ParameterError "substeps").
+  Real afterDrift(Fabric& f, Real dt) override { return afterDrift(f, dt, true, true); }
+  /// Spring substeps (FabricEngine::setSubsteps): the pass with the substep dt (its kick: the
+  /// energy books) apart from the horizon, the time until the next pass, over which the boxes
+  /// grow, the contacts are listed, the bodies' motion is predicted and the rows share their rooms.
   Real beforeDrift(Fabric& f, Real dt, Real horizon);
-  Real afterDrift(Fabric& f, Real dt, Real horizon);
-  /// Whether a stage with these parameters can run with a horizon longer than the step (no
-  /// force-based parts), and the allowed range of substeps named when it cannot.
-  static bool impulsesOnly(const ContactParams& p);
-  static constexpr const char* kSubstepsWithForces =
-      "1 with response penalty or flattening springs (their forces act over one substep)";
+  /// A later substep of the same pass: the listed contacts measured again where the nodes and
+  /// bodies are now (the same points and sections: remeasure, remeasureBody) and their rows solved
+  /// again over what is left of the horizon, so that the springs between two passes cannot push a
+  /// contact in (with the rows of the pass start only, the projection took it out and put 2-7 J
+  /// into the compare's 5 J sphere scene). Returns the energy the impulses added [J].
+  Real resolveAgain(Fabric& f, Real dt, Real horizonLeft);
+  /// The bodies drift over dt; then the restitution pass (after the pass's first substep: on the
+  /// rows of the pass, whose approach it reverses) and the position projection (after its last).
+  Real afterDrift(Fabric& f, Real dt, bool restitute, bool project);
+  /// Whether a stage with these parameters can run with substeps (the gap model's impulses only:
+  /// penalty forces and section springs would act over one substep, and the paper model's contacts
+  /// are not measured again), and the allowed range named when it cannot.
+  static bool allowsSubsteps(const ContactParams& p);
+  static constexpr const char* kSubstepsRange =
+      "1 with contact_model paper, response penalty or flattening springs (only the gap model's impulses substep)";
   /// Spring energy of the penalty contacts and section springs half way through the step's drift
   /// (law/NormalForces: the pair of the synchronised kinetic energy) [J].
   Real springEnergy() const override { return spring_; }

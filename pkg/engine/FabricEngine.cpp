@@ -9,14 +9,18 @@ FabricEngine::FabricEngine(Fabric fabric)
     : fabric_(std::make_unique<Fabric>(std::move(fabric))), dynamics_(*fabric_) {}
 
 namespace {
-// The collision stage seen by one substep of a step of `horizon`: its pass before the first
-// substep's drift, its projection after the last one's; the books' takes and springs every substep.
+// The collision stage seen by substep k of m of a step of `horizon`: its pass before the first
+// substep's drift and its restitution after it, its rows solved again before the other substeps'
+// drifts, its projection after the last one's; the bodies drift every substep, the books' takes
+// and springs every substep.
 class SubstepHook final : public StepHook {
  public:
-  SubstepHook(CollisionStage& c, Real horizon) : c_(c), horizon_(horizon) {}
-  bool first = false, last = false;
-  Real beforeDrift(Fabric& f, Real dt) override { return first ? c_.beforeDrift(f, dt, horizon_) : 0; }
-  Real afterDrift(Fabric& f, Real dt) override { return last ? c_.afterDrift(f, dt, horizon_) : 0; }
+  SubstepHook(CollisionStage& c, Real horizon, int m) : c_(c), horizon_(horizon), m_(m) {}
+  int k = 0;
+  Real beforeDrift(Fabric& f, Real dt) override {
+    return k == 0 ? c_.beforeDrift(f, dt, horizon_) : c_.resolveAgain(f, dt, horizon_ * (m_ - k) / m_);
+  }
+  Real afterDrift(Fabric& f, Real dt) override { return c_.afterDrift(f, dt, k == 0, k == m_ - 1); }
   Real takeBodyWork() override { return c_.takeBodyWork(); }
   Real takeProjectionEnergy() override { return c_.takeProjectionEnergy(); }
   Real takeFrictionWork() override { return c_.takeFrictionWork(); }
@@ -25,6 +29,7 @@ class SubstepHook final : public StepHook {
  private:
   CollisionStage& c_;
   Real horizon_;
+  int m_;
 };
 }  // namespace
 
@@ -40,24 +45,21 @@ void FabricEngine::step(Real dt) {
     for (int k = 0; k < substeps_; ++k) dynamics_.step(h, nullptr);
     return;
   }
-  SubstepHook hook(*collisions_, dt);
-  for (int k = 0; k < substeps_; ++k) {
-    hook.first = k == 0, hook.last = k == substeps_ - 1;
-    dynamics_.step(h, &hook);
-  }
+  SubstepHook hook(*collisions_, dt, substeps_);
+  for (hook.k = 0; hook.k < substeps_; ++hook.k) dynamics_.step(h, &hook);
 }
 
 void FabricEngine::setSubsteps(int m) {
   if (m < 1 || m > 64) throw ParameterError("substeps", std::to_string(m), "[1, 64]");
-  if (m > 1 && collisions_ && !CollisionStage::impulsesOnly(collisions_->params()))
-    throw ParameterError("substeps", std::to_string(m), CollisionStage::kSubstepsWithForces);
+  if (m > 1 && collisions_ && !CollisionStage::allowsSubsteps(collisions_->params()))
+    throw ParameterError("substeps", std::to_string(m), CollisionStage::kSubstepsRange);
   substeps_ = m;
 }
 
 void FabricEngine::enableCollisions(const ContactParams& p, BroadPhase broad) {
   p.validate();
-  if (substeps_ > 1 && !CollisionStage::impulsesOnly(p))
-    throw ParameterError("substeps", std::to_string(substeps_), CollisionStage::kSubstepsWithForces);
+  if (substeps_ > 1 && !CollisionStage::allowsSubsteps(p))
+    throw ParameterError("substeps", std::to_string(substeps_), CollisionStage::kSubstepsRange);
   if (!collisions_) collisions_ = std::make_unique<CollisionStage>(p, broad);
   collisions_->setParams(p);
   collisions_->broadPhase = broad;

@@ -191,7 +191,7 @@ def test_bad_adaptive_keys_name_the_key(tmp_path, args, key):
 
 
 @pytest.mark.parametrize('args', [['substeps=0'], ['substeps=65'], ['substeps=2', 'response=penalty'],
-                                  ['substeps=2', 'flattening=springs']])
+                                  ['substeps=2', 'flattening=springs'], ['substeps=2', 'contact_model=paper']])
 def test_bad_substeps_name_the_key(tmp_path, args):
     rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', *args)
     assert rc != 0 and 'substeps = ' in log and 'allowed' in log
