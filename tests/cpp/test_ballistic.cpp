@@ -3,6 +3,7 @@
 // tunnelling at 1000 m/s, restitution, the moving test, bad input).
 #include "body_util.hpp"
 #include "chain_util.hpp"
+#include "yarn_util.hpp"
 #include "engine/FabricEngine.hpp"
 #include "geom/BodyContact.hpp"
 #include <gtest/gtest.h>
@@ -155,39 +156,6 @@ TEST(Breakage, BadParametersNameThemselves) {
   p.filterLength = 0, p.weibullModulus = 0.5;
   EXPECT_EQ(parameterOf([&] { d.configureBreakage(p); }), "weibull_m");
 }
-
-namespace {
-
-YarnSection roundSection(Real r) {
-  YarnSection s;
-  s.width = s.thickness = 2 * r;
-  return s;
-}
-
-// A straight round yarn (r = 0.1 mm) of 40 CPs of 0.25 mm along x at z = 0, with collisions on.
-std::unique_ptr<FabricEngine> yarnEngine(Real restitution, bool clampEnds) {
-  Vec3Array pts;
-  for (int i = 0; i <= 40; ++i) pts.push_back(Vec3((i - 20) * 0.25e-3, 0, 0));
-  Fabric f;
-  f.addYarn(pts, km2Material(), roundSection(1e-4));
-  auto e = std::make_unique<FabricEngine>(std::move(f));
-  if (clampEnds) e->dynamics().fix(0), e->dynamics().fix(40);
-  ContactParams p;
-  p.restitution = restitution;
-  p.positionCorrection = 0;
-  e->enableCollisions(p);
-  return e;
-}
-
-
-Vec3 momentum(const FabricEngine& e) {
-  Vec3 p = Vec3::Zero();
-  for (Index i = 0; i < e.fabric().nNodes(); ++i) p += e.fabric().mass[i] * e.fabric().vel[i];
-  for (const RigidBody& b : e.collisions()->bodies) p += b.mass * b.vel;
-  return p;
-}
-
-}  // namespace
 
 // Impulses between a free yarn and a body conserve the total momentum (the springs do too), step
 // by step: a box hit face on; a sphere hit off the yarn's axis, which does not turn (its impulses

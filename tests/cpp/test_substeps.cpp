@@ -5,6 +5,7 @@
 // substep are refused before anything moves.
 #include "body_util.hpp"
 #include "chain_util.hpp"
+#include "yarn_util.hpp"
 #include "engine/FabricEngine.hpp"
 #include <gtest/gtest.h>
 #include <cmath>
@@ -13,12 +14,6 @@ using namespace woven;
 using namespace woven_test;
 
 namespace {
-
-YarnSection roundSection(Real r) {
-  YarnSection s;
-  s.width = s.thickness = 2 * r;
-  return s;
-}
 
 // A straight round yarn (r = 0.1 mm) of 40 CPs of 0.25 mm along x, its nodes given a transverse
 // wave (a plucked string) so that the springs work.
@@ -32,22 +27,9 @@ Fabric pluckedYarn() {
 }
 
 std::unique_ptr<FabricEngine> yarnWithCollisions(Real restitution, bool clampEnds, int substeps) {
-  auto e = std::make_unique<FabricEngine>(pluckedYarn());
-  for (Index i = 0; i < e->fabric().nNodes(); ++i) e->fabric().vel[i].setZero();
-  if (clampEnds) e->dynamics().fix(0), e->dynamics().fix(40);
-  ContactParams p;
-  p.restitution = restitution;
-  p.positionCorrection = 0;
-  e->enableCollisions(p);
+  auto e = yarnEngine(restitution, clampEnds);
   e->setSubsteps(substeps);
   return e;
-}
-
-Vec3 momentum(const FabricEngine& e) {
-  Vec3 p = Vec3::Zero();
-  for (Index i = 0; i < e.fabric().nNodes(); ++i) p += e.fabric().mass[i] * e.fabric().vel[i];
-  for (const RigidBody& b : e.collisions()->bodies) p += b.mass * b.vel;
-  return p;
 }
 
 }  // namespace
