@@ -235,6 +235,22 @@ Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool fricti
   return miss;
 }
 
+// solveRow's update of a coloured row without friction (such rows have no body), in the same
+// operations: the same bits.
+Real ImpulseLaw::solveRow(Fabric& f, SweepRow& r) {
+  const Real vn = relativeVelocity(f, r.node, r.w).dot(r.n);
+  const Real miss = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
+  const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
+  const Vec3 J = (lambda - r.lambda) * r.n;
+  r.lambda = lambda;
+  applyImpulse(f, r.node, r.w, J);
+  return miss;
+}
+
+Real ImpulseLaw::solveRow(Fabric& f, Index k, const ContactParams& p) {
+  return packed_[k].body ? solveRow(f, rows_[k], p, p.bodyFriction > 0) : solveRow(f, packed_[k]);
+}
+
 // Coloured sweeps: the colours in order, each colour's rows on the threads (they share no node:
 // each writes only its own nodes, so any split gives the same bits), then the serial tail (the
 // rows on a body) in order. A colour's misses are kept per row; their largest is order-free.
@@ -249,22 +265,47 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
   miss_.resize(rows_.size());
   const int colours = colouring_.colours();
   double seconds[2] = {0, 0};  // of the split sweep and of the one-thread sweep
+  // Without friction between yarns the rows are swept packed (SweepRow; the rows on a body as they
+  // are), their impulses copied back after.
+  const bool packed = !(p.friction > 0);
+  const Index nRows = static_cast<Index>(rows_.size());
+  if (packed) {
+    packed_.resize(rows_.size());
+    parallelFor(nRows, kParallelGrain, nThreads, [&](Index k) {
+      const Row& r = rows_[k];
+      SweepRow& q = packed_[k];
+      for (int i = 0; i < 4; ++i) q.node[i] = r.node[i], q.w[i] = r.w[i];
+      q.n = r.n, q.target = r.target, q.invK = r.invK, q.lambda = r.lambda, q.body = r.body >= 0;
+    });
+  }
+  int sweeps = p.maxIterations;
   for (int it = 0; it < p.maxIterations; ++it) {
     const bool split = nThreads > 1 && (it == 0 || (it > 1 && seconds[0] <= seconds[1]));
     const auto t0 = Clock::now();
     for (int c = 0; c < colours; ++c) {
       const Index b = start_[c];
-      parallelFor(start_[c + 1] - b, kRowGrain, split ? nThreads : 1,
-                  [&](Index k) { miss_[b + k] = solveRow(f, rows_[b + k], p, friction); });
+      if (packed)
+        parallelFor(start_[c + 1] - b, kRowGrain, split ? nThreads : 1,
+                    [&](Index k) { miss_[b + k] = solveRow(f, packed_[b + k]); });
+      else
+        parallelFor(start_[c + 1] - b, kRowGrain, split ? nThreads : 1,
+                    [&](Index k) { miss_[b + k] = solveRow(f, rows_[b + k], p, friction); });
     }
     if (it < 2) seconds[it] = std::chrono::duration<double>(Clock::now() - t0).count();
-    for (Index k = start_[RowColouring::kColours], n = static_cast<Index>(rows_.size()); k < n; ++k)
-      miss_[k] = solveRow(f, rows_[k], p, friction);
+    for (Index k = start_[RowColouring::kColours]; k < nRows; ++k)
+      miss_[k] = packed ? solveRow(f, k, p) : solveRow(f, rows_[k], p, friction);
     Real worst = 0;
     for (Real m : miss_) worst = std::max(worst, m);
-    if (worst <= p.tolerance) return it + 1;
+    if (worst <= p.tolerance) {
+      sweeps = it + 1;
+      break;
+    }
   }
-  return p.maxIterations;
+  if (packed)
+    parallelFor(nRows, kParallelGrain, nThreads, [&](Index k) {
+      if (!packed_[k].body) rows_[k].lambda = packed_[k].lambda;
+    });
+  return sweeps;
 }
 
 Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p, std::vector<RigidBody>* bodies, Real* bodyWork) {
