@@ -17,6 +17,7 @@ import os
 import subprocess
 import sys
 
+from woven.ballistic import SHAPES
 from woven.params import read_params
 from woven.output import out_dir, write_summary
 
@@ -30,7 +31,7 @@ p = read_params({
     't_end': (1e-4, 's', 'simulated time at most (both runs stop at perforation)'),
     'quick': (False, '', '1: a 12 mm ply, for a fast check of the pipeline'),
     'substeps': (1, '', 'spring substeps per contact step of the adaptive run (ballistic.py), [1, cp_fine]'),
-    'shape': ('box', '', "projectile, as ballistic.py: 'box', 'sphere', 'rcc' or 'fsp'"),
+    'shape': ('box', '', 'projectile, as ballistic.py: ' + ', '.join(SHAPES)),
     'size': (5.59e-3, 'm', "cube edge or sphere diameter, as ballistic.py (given only when set here)"),
     'mass': (1.1e-3, 'kg', 'projectile mass, as ballistic.py (given only when set here)'),
     'goal_speedup': (5.0, '', 'goal: uniform wall time / adaptive wall time at least this'),
@@ -43,8 +44,8 @@ if not p.fine_radius >= 0:
     raise ValueError('fine_radius = %r is invalid: allowed [0, inf) m' % p.fine_radius)
 if not (isinstance(p.substeps, int) and 1 <= p.substeps <= p.cp_fine):
     raise ValueError('substeps = %r is invalid: allowed an integer in [1, cp_fine = %d]' % (p.substeps, p.cp_fine))
-if p.shape not in ('box', 'sphere', 'rcc', 'fsp'):
-    raise ValueError("shape = %r is invalid: allowed 'box', 'sphere', 'rcc' or 'fsp'" % (p.shape,))
+if p.shape not in SHAPES:
+    raise ValueError('shape = %r is invalid: allowed %s' % (p.shape, ', '.join(SHAPES)))
 if not 1e-4 <= p.size <= 0.1:
     raise ValueError('size = %r is invalid: allowed [1e-4, 0.1] m' % (p.size,))
 if not 0 < p.mass <= 10:
