@@ -265,7 +265,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         const Real widest = std::max(std::max(widest_[i], widest_[i + 1]), std::max(widest_[j], widest_[j + 1]));
         const SegmentClosest axes = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
         if (axes.distance > 2 * widest + reach || !obbOverlap(grown_[pr.a], grown_[pr.b])) {
-          pc = PairMemo();  // as a pair the broad phase no longer lists: the contacts do not depend on its skin
+          if (pc.memo) pc = PairMemo();  // as a pair the broad phase no longer lists: the contacts do not depend on its skin
           continue;
         }
         bool side = sideBySide(f, pr.a, pr.b, pc.memo && pc.side);

@@ -197,15 +197,23 @@ Real ImpulseLaw::energyChange(const Fabric& f) const {
 // coloured (SweepOrder::Sequential): every row in the serial tail, in list order.
 template <class RowAt>
 void ImpulseLaw::colourRows(const Fabric& f, Index n, bool coloured, RowAt&& rowAt) {
+  rows_.resize(static_cast<std::size_t>(n));
+  if (!coloured) {  // the serial tail alone, in list order: nothing to colour
+    parallelFor(n, kParallelGrain, threads(), [&](Index k) { rows_[k] = rowAt(k); });
+    std::fill(start_, start_ + RowColouring::kColours + 1, Index(0));
+    start_[RowColouring::kColours + 1] = n;
+    colours_ = 0;
+    return;
+  }
   colouring_.build(n, f.nNodes(), [&](Index r, Index* node) {
     const Row& q = rowAt(r);
-    if (q.body >= 0 || !coloured) return -1;  // all of a body's rows share it
+    if (q.body >= 0) return -1;  // all of a body's rows share it
     for (int k = 0; k < 4; ++k) node[k] = q.node[k];
     return 4;
   });
-  rows_.resize(static_cast<std::size_t>(n));
   parallelFor(n, kParallelGrain, threads(), [&](Index k) { rows_[k] = rowAt(colouring_.order()[k]); });
   for (int c = 0; c <= RowColouring::kColours + 1; ++c) start_[c] = colouring_.begin(c);
+  colours_ = colouring_.colours();
 }
 
 // One Gauss-Seidel update of row r (projected on J >= 0 and the friction cone); returns how far the
@@ -263,7 +271,7 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
   using Clock = std::chrono::steady_clock;
   const int nThreads = threads();
   miss_.resize(rows_.size());
-  const int colours = colouring_.colours();
+  const int colours = colours_;
   double seconds[2] = {0, 0};  // of the split sweep and of the one-thread sweep
   // Without friction between yarns the rows are swept packed (SweepRow; the rows on a body as they
   // are), their impulses copied back after.
@@ -292,10 +300,13 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
                     [&](Index k) { miss_[b + k] = solveRow(f, rows_[b + k], p, friction); });
     }
     if (it < 2) seconds[it] = std::chrono::duration<double>(Clock::now() - t0).count();
-    for (Index k = start_[RowColouring::kColours]; k < nRows; ++k)
-      miss_[k] = packed ? solveRow(f, k, p) : solveRow(f, rows_[k], p, friction);
+    const Index tail = start_[RowColouring::kColours];
     Real worst = 0;
-    for (Real m : miss_) worst = std::max(worst, m);
+    for (Index k = 0; k < tail; ++k) worst = std::max(worst, miss_[k]);
+    for (Index k = tail; k < nRows; ++k) {
+      miss_[k] = packed ? solveRow(f, k, p) : solveRow(f, rows_[k], p, friction);
+      worst = std::max(worst, miss_[k]);
+    }
     if (worst <= p.tolerance) {
       sweeps = it + 1;
       break;

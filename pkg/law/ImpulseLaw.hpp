@@ -138,6 +138,7 @@ class ImpulseLaw {
   std::vector<Row> bodyRows_;
   RowColouring colouring_;
   Index start_[RowColouring::kColours + 2] = {};  // rows_[start_[c], start_[c + 1]): colour c, the tail last
+  int colours_ = 0;                               // colours in use (0: every row in the tail)
   std::vector<Real> miss_;                        // per row: its miss in the last sweep [m/s]
   std::vector<BodyVelocity> bodyVel_;
   Vec3Array vBefore_;
