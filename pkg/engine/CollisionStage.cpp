@@ -195,13 +195,14 @@ bool CollisionStage::reuse(const Fabric& f, std::size_t k, CPContact& c) const {
 // narrow phase.
 void CollisionStage::remapCache(bool caching, bool gapModel) {
   const auto follow = [&](auto& now, auto& old, bool used) {
+    using Entry = typename std::decay_t<decltype(now)>::value_type;
     old.swap(now);
-    now.assign(used ? pairs_.size() : 0, typename std::decay_t<decltype(now)>::value_type());
+    now.resize(used ? pairs_.size() : 0);  // each entry written once below
     if (!used) return;
     std::size_t o = 0;
     for (std::size_t k = 0; k < pairs_.size(); ++k) {
       while (o < cachePairs_.size() && cachePairs_[o] < pairs_[k]) ++o;
-      if (o < cachePairs_.size() && cachePairs_[o] == pairs_[k] && o < old.size()) now[k] = old[o];
+      now[k] = o < cachePairs_.size() && cachePairs_[o] == pairs_[k] && o < old.size() ? old[o] : Entry();
     }
   };
   follow(cache_, cacheOld_, caching);
