@@ -73,13 +73,14 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   // costly part and reads nothing the rows change); then the body rows, one by one.
   const Index nc = static_cast<Index>(contacts.size());
   slots_.resize(contacts.size());
+  hasRow_.resize(contacts.size());
   // Model Gap: a row for every listed contact (the multiplier's sign decides); one that does not
   // approach beyond its gap at the start gets the gap as its room (its flattening capacity is not
   // measured: the row then stops it at the gap if other rows push it on).
   const bool everyContact = p.model == ContactModel::Gap;
   parallelFor(nc, 256, threads(), [&](Index c) {
     Row& r = slots_[c];
-    r.invK = 0;  // no row
+    hasRow_[c] = 0;
     nodesAndWeights(f, contacts[c], r.node, r.w);
     r.n = contacts[c].normal;
     r.vn0 = relativeVelocity(f, r.node, r.w).dot(r.n);
@@ -99,10 +100,11 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     r.invK = 1 / K;
     r.target = -allowed;
     r.lambda = 0, r.lambdaT.setZero(), r.body = -1, r.arm.setZero();
+    hasRow_[c] = 1;
   });
   yarnRows_.clear();
   for (Index c = 0; c < nc; ++c)
-    if (slots_[c].invK > 0) yarnRows_.push_back(c);
+    if (hasRow_[c]) yarnRows_.push_back(c);
   bodyRows_.clear();
   for (const BodyContact& c : bodyContacts) {
     Row r;

@@ -133,7 +133,8 @@ class ImpulseLaw {
   Real energyChange(const Fabric& f) const;  // kinetic energy of the integer step the impulses add [J]
   std::vector<Row> rows_, sorted_;
   std::vector<SweepRow> packed_;  // solve: rows_ packed, while friction between yarns is off
-  std::vector<Row> slots_;      // resolve: per contact its row (invK 0: none)
+  std::vector<Row> slots_;      // resolve: per contact its row (where hasRow_)
+  std::vector<std::uint8_t> hasRow_;
   std::vector<Index> yarnRows_;  // the contacts with a row, in order
   std::vector<Row> bodyRows_;
   RowColouring colouring_;
