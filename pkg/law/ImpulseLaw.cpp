@@ -245,8 +245,8 @@ Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool fricti
   return miss;
 }
 
-// solveRow's update of a coloured row without friction (such rows have no body), in the same
-// operations: the same bits.
+// solveRow's update of a row on no body while friction between yarns is off, in the same operations:
+// the same bits (measured: the scenes' figures unchanged to the last digit).
 Real ImpulseLaw::solveRow(Fabric& f, SweepRow& r) {
   const Real vn = relativeVelocity(f, r.node, r.w).dot(r.n);
   const Real miss = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;

@@ -104,8 +104,8 @@ class ImpulseLaw {
     int body = -1;      // B side: a rigid body (weights w[2], w[3] are 0), at arm r from its centre
     Vec3 arm = Vec3::Zero();
   };
-  // What a frictionless update of a coloured row reads and writes, packed (96 B against a Row's 192):
-  // the sweeps stream the rows once per colour, and this halves the memory they move.
+  // What an update without friction of a row on no body reads and writes, packed (104 B against a
+  // Row's 192): a sweep streams every row, and this nearly halves the memory it moves.
   struct SweepRow {
     Index node[4];
     Real w[4];
@@ -126,7 +126,7 @@ class ImpulseLaw {
   template <class RowAt>
   void colourRows(const Fabric& f, Index n, bool coloured, RowAt&& rowAt);  // rows_ by colour, start_ set
   Real solveRow(Fabric& f, Row& r, const ContactParams& p, bool friction);  // returns the row's miss
-  static Real solveRow(Fabric& f, SweepRow& r);  // the same update without friction or a body
+  static Real solveRow(Fabric& f, SweepRow& r);  // the same update, for a row without friction or body
   Real solveRow(Fabric& f, Index k, const ContactParams& p);  // row k, packed unless on a body
   int solve(Fabric& f, const ContactParams& p, bool friction);  // coloured Gauss-Seidel sweeps, returns the count
   void keepVelocities(const Fabric& f);      // of the touched nodes, before the impulses
