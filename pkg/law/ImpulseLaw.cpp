@@ -257,10 +257,6 @@ Real ImpulseLaw::solveRow(Fabric& f, SweepRow& r) {
   return miss;
 }
 
-Real ImpulseLaw::solveRow(Fabric& f, Index k, const ContactParams& p) {
-  return packed_[k].body ? solveRow(f, rows_[k], p, p.bodyFriction > 0) : solveRow(f, packed_[k]);
-}
-
 // Coloured sweeps: the colours in order, each colour's rows on the threads (they share no node:
 // each writes only its own nodes, so any split gives the same bits), then the serial tail (the
 // rows on a body) in order. A colour's misses are kept per row; their largest is order-free.
@@ -306,7 +302,7 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
     Real worst = 0;
     for (Index k = 0; k < tail; ++k) worst = std::max(worst, miss_[k]);
     for (Index k = tail; k < nRows; ++k) {
-      miss_[k] = packed ? solveRow(f, k, p) : solveRow(f, rows_[k], p, friction);
+      miss_[k] = packed && !packed_[k].body ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
       worst = std::max(worst, miss_[k]);
     }
     if (worst <= p.tolerance) {

@@ -127,7 +127,6 @@ class ImpulseLaw {
   void colourRows(const Fabric& f, Index n, bool coloured, RowAt&& rowAt);  // rows_ by colour, start_ set
   Real solveRow(Fabric& f, Row& r, const ContactParams& p, bool friction);  // returns the row's miss
   static Real solveRow(Fabric& f, SweepRow& r);  // the same update, for a row without friction or body
-  Real solveRow(Fabric& f, Index k, const ContactParams& p);  // row k, packed unless on a body
   int solve(Fabric& f, const ContactParams& p, bool friction);  // coloured Gauss-Seidel sweeps, returns the count
   void keepVelocities(const Fabric& f);      // of the touched nodes, before the impulses
   Real energyChange(const Fabric& f) const;  // kinetic energy of the integer step the impulses add [J]
