@@ -518,6 +518,9 @@ BOOST_PYTHON_MODULE(_woven) {
       .add_property("substeps", &FabricEngine::substeps, &FabricEngine::setSubsteps,
                     "spring substeps per step, [1, 64]: the springs step at dt / substeps, the collisions once per step "
                     "(multiple time stepping; only without penalty response or section springs)")
+      .add_property("multirate", &FabricEngine::multiRate, &FabricEngine::setMultiRate,
+                    "multi-rate springs with substeps > 1: the elements stable at dt_max step once per step (r-RESPA's "
+                    "slow force), the others substeps times; later substeps solve again only the rows near a fast node or a body")
       .add_property("time", +[](FabricEngine& e) { return e.dynamics().time(); }, "simulated time [s]")
       .add_property("iter", +[](FabricEngine& e) { return e.dynamics().stepCount(); }, "steps taken")
       .add_property("blowup_factor", &blowup, &setBlowup)

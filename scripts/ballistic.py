@@ -55,6 +55,9 @@ defaults.update({
     # dt_crit, the springs at O.dt / substeps, the contacts once per O.dt.
     'substeps': (1, '', 'spring substeps per contact step, [1, 64] (adaptive: cp_per_span / cp_coarse meets the '
                  'contacts at the coarse CPs\' rate); above 1 only with the gap model\'s impulses'),
+    'multirate': (0, '', 'with substeps > 1, 1: the CPs stable at substeps x dt_crit (the coarse ones) step once per '
+                  'O.dt and later substeps solve again only the rows near the others or the projectile; 0: every '
+                  'CP steps substeps times, every row solved again (docs/design.md)'),
 })
 for k in ('fine_x', 'fine_y'):  # the fine region is centred on the impact point, the ply's middle
     del defaults[k]
@@ -199,6 +202,8 @@ if p.fine_radius >= 0 and not (1 <= p.cp_coarse <= p.cp_per_span):
     bad('cp_coarse', '[1, cp_per_span = %d] CPs between crossings outside fine_radius' % p.cp_per_span)
 if not (isinstance(p.substeps, int) and 1 <= p.substeps <= 64):
     bad('substeps', 'an integer in [1, 64]')
+if p.multirate not in (0, 1):
+    bad('multirate', '0 or 1')
 if p.substeps > 1 and (p.response == 'penalty' or p.flattening == 'springs' or p.model == 'yade' or p.contact_model == 'paper'):
     bad('substeps', "1 with response penalty, flattening springs, contact_model paper or model yade (only the gap model's "
                     "impulses substep)")
@@ -236,6 +241,7 @@ if p.shape in ('box', 'sphere') and p.yaw == 0 and p.obliquity == 0:
 
 O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
 eng.substeps = p.substeps
+eng.multirate = bool(p.multirate)
 woven.attach(eng, set_dt=True, safety=p.safety)
 every = max(1, int(math.ceil(p.t_end / O.dt)) // p.samples)
 guard = EnergyGuard(eng, p.energy_guard, p.guard_safety or 0.5 * p.safety)
@@ -437,7 +443,7 @@ measured = {
     'broken_elements': eng.broken_elements, 'broken_yarns': eng.broken_yarns,
     'first_break_time': log[0]['time'] if log else None,
     'simulated_time': O.time, 'steps': O.iter, 'dt': O.dt, 'yarns': eng.n_yarns, 'cps': eng.n_elements,
-    'dt_crit': eng.dt_crit, 'substeps': eng.substeps, 'fabric_steps': eng.iter,
+    'dt_crit': eng.dt_crit, 'substeps': eng.substeps, 'multirate': int(eng.multirate), 'fabric_steps': eng.iter,
     'fine_radius': weave_args['fine_radius'], 'fine_spans': w.summary['fine_spans'], 'spans': w.summary['spans'],
     'wall_seconds': wall, 'cpu_seconds': cpu, 'cp_steps_per_second': cp_steps / wall if wall > 0 else None,
     'phase_seconds': phases, 'mirror_seconds': state['mirror_seconds'],

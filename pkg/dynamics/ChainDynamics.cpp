@@ -17,6 +17,24 @@ Real criticalTimeStep(const Fabric& f) {
   return dt;
 }
 
+std::vector<std::uint8_t> slowElements(const Fabric& f, Real outerDt) {
+  const Index nn = f.nNodes(), ne = f.nElems();
+  std::vector<Real> sumK(nn, 0.0), factor(nn, 1.0);
+  for (Index e = 0; e < ne; ++e) {
+    if (!f.alive[e] || f.stiffness[e] <= 0) continue;
+    const Real K = f.stiffness[e], xi = f.damping[e] / std::sqrt(K * f.elementMass(e));
+    const Real fe = std::sqrt(1 + xi * xi) - xi;
+    for (Index i : {f.elem0[e], f.elem0[e] + 1}) sumK[i] += K, factor[i] = std::min(factor[i], fe);
+  }
+  std::vector<std::uint8_t> slow(ne, 0);
+  const auto stable = [&](Index i) {
+    return f.invMass[i] == 0 || sumK[i] == 0 || std::sqrt(2 * f.mass[i] / sumK[i]) * factor[i] >= outerDt;
+  };
+  for (Index e = 0; e < ne; ++e)
+    slow[e] = f.alive[e] && f.stiffness[e] > 0 && stable(f.elem0[e]) && stable(f.elem0[e] + 1);
+  return slow;
+}
+
 ChainDynamics::ChainDynamics(Fabric& fabric) : f_(fabric), dtCrit_(criticalTimeStep(fabric)) {}
 
 void ChainDynamics::prescribeVelocity(Index i, const Vec3& v) {
@@ -72,6 +90,27 @@ void ChainDynamics::configureBreakage(const BreakageParams& p) {
   computeForces(0.0);  // strains of the current state: the filter starts from them
   breakage_.configure(f_, p);
   checkpoint();  // the last good state carries the new breakage state (restoreLastGood puts it back)
+}
+
+void ChainDynamics::setSlowElements(std::vector<std::uint8_t> slow, int m, bool resplit) {
+  require(m >= 1 && m <= 64, "substeps", m, "[1, 64]");
+  require(slow.empty() || static_cast<Index>(slow.size()) == f_.nElems(), "slow_elements", static_cast<double>(slow.size()),
+          "empty or one flag per element (" + fmt(f_.nElems()) + ")");
+  if (m == 1 || std::find(slow.begin(), slow.end(), 1) == slow.end()) slow.clear();
+  const int rate = slow.empty() ? 1 : m;
+  chainSteps_ = m;
+  if (rate == rate_ && slow == slow_) return;
+  slow_ = std::move(slow);
+  rate_ = rate;
+  if (!started_ || !resplit) return;
+  // The force in f_.force serves the next kick's two halves: the last step's closing half, which
+  // must keep the old weights, and the next step's opening half, which takes the new. Recompute it
+  // with the new weights (the same positions and velocities: only the weights change) and give the
+  // velocities the closing half's difference, (dt_prev / 2) (F_old - F_new) / m: the kick then closes
+  // with the old force and opens with the new, and the synchronised velocity is unchanged.
+  const Vec3Array old = f_.force;
+  computeForces(0.0);  // the books take nothing at dt = 0
+  for (Index i = 0; i < f_.nNodes(); ++i) f_.vel[i] += (0.5 * dtPrev_ * f_.invMass[i]) * (old[i] - f_.force[i]);
 }
 
 void ChainDynamics::setBodyAcceleration(const Vec3& g) {
@@ -211,6 +250,10 @@ void ChainDynamics::springForces(Real dt) {
   const Real* __restrict C = f_.damping.data();
   Real* __restrict strain = f_.strain.data();
   Real* __restrict tension = f_.tension.data();
+  // Multi-rate: a slow element's force enters with weight slowNow_ (setSlowElements); 1 x T is T,
+  // so one rate keeps its bits.
+  const std::uint8_t* slow = slow_.empty() ? nullptr : slow_.data();
+  const Real weight[2] = {1.0, slowNow_};
   const Index nE = f_.nElems();
   edge_.assign(static_cast<std::size_t>(chunkCount(nE, kElemChunk)), Vec3::Zero());
   const SpringSums sums = chunkedSum(nE, kElemChunk, threads(), SpringSums(), [&](Index c0, Index c1) {
@@ -237,10 +280,11 @@ void ChainDynamics::springForces(Real dt) {
           Te = taut ? Te : 0.0;
           T = taut ? std::max(T, 0.0) : 0.0;
         }
-        s.elastic += Te * stretch;        // = K*stretch^2 where the spring acts
-        s.dissipated += (T - Te) * ldot;  // a non-finite l reaches both sums, even through a clamp
+        const Real w = slow ? weight[slow[e]] : 1.0;
+        s.elastic += Te * stretch;              // = K*stretch^2 where the spring acts
+        s.dissipated += (w * (T - Te)) * ldot;  // a non-finite l reaches both sums, even through a clamp
         if (StoreElementState) strain[e] = stretch / l0[e], tension[e] = T;
-        const Vec3 Fa = T * n;
+        const Vec3 Fa = (w * T) * n;
         if (inherited && e == e0) edge_[c0 / kElemChunk] = Fa;
         else F[a] += Fa;
         F[a + 1] = -Fa;
@@ -281,13 +325,15 @@ void ChainDynamics::finishLoads(Real dt) {
 }
 
 void ChainDynamics::computeForces(Real dt) {
+  slowNow_ = rate_;  // forces at rest are those of a slow step's end
   springForces<true>(dt);
   finishLoads(dt);
 }
 
-void ChainDynamics::step(Real dt, StepHook* hook) {
+void ChainDynamics::step(Real dt, StepHook* hook, bool outerEnd) {
   if (!(std::isfinite(dt) && dt > 0)) throw ParameterError("dt", fmt(dt), "(0, dt_crit] s");
   if (!started_) start();
+  slowNow_ = outerEnd ? Real(rate_) : Real(0);
   const Real ramp = loads_.velocityRamp > 0 ? std::min(Real(1), (time_ + 0.5 * dt) / loads_.velocityRamp) : 1.0;
   for (std::size_t k = 0; k < loads_.kinematicNodes.size(); ++k)
     f_.vel[loads_.kinematicNodes[k]] = ramp * loads_.kinematicVelocity[k];
@@ -353,7 +399,9 @@ void ChainDynamics::step(Real dt, StepHook* hook) {
                                fmt(limits.blowupFactor) + " x (initial + |work| + contact input) / (1 - (dt/dt_crit)^2) = " + fmt(budget) +
                                " J (time step too large, or a load out of bounds)");
   }
-  if (limits.checkpointInterval > 0 && step_ % limits.checkpointInterval == 0) checkpoint();
+  // Only where a step of every rate ends (outerEnd), once per checkpointInterval chain steps: the
+  // state there is whole (forces and the slow half kick owed; the collision stage's pass).
+  if (limits.checkpointInterval > 0 && outerEnd && step_ % limits.checkpointInterval < chainSteps_) checkpoint();
 }
 
 void ChainDynamics::bookContact(Real added) {

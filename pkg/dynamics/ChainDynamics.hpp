@@ -20,6 +20,14 @@ namespace woven {
 /// m_e = rho*A*l0, i.e. l0*sqrt(rho/E)*(...): 2/omega_max of the central-difference scheme.
 Real criticalTimeStep(const Fabric& f);
 
+/// The elements stable at a step of outerDt [s] (1: slow, 0: fast), for multi-rate springs
+/// (ChainDynamics::setSlowElements). Each node i bounds the frequencies its springs reach by
+/// Gershgorin's theorem on M^-1 K: omega^2 <= 2 sum_e K_e / m_i over its live elements, so a step is
+/// stable at the node up to dt_i = sqrt(2 m_i / sum_e K_e) (sqrt(1+xi^2)-xi), xi the largest damping
+/// ratio there (for a uniform chain dt_i is criticalTimeStep exactly); an element is slow when
+/// both its nodes have dt_i >= outerDt (a kinematic node: any step). Broken elements are fast.
+std::vector<std::uint8_t> slowElements(const Fabric& f, Real outerDt);
+
 struct InstabilityLimits {
   /// Stop if kinetic+elastic+damped+contact > factor*(initial+|work|+contact input)/(1-(dt/dt_crit)^2) + floor (the
   /// 1/(1-(dt/dt_crit)^2) is how far a stable step lets the energy of a linear chain oscillate above
@@ -83,7 +91,23 @@ class ChainDynamics {
   /// throws InstabilityError on a non-finite state or an energy blow-up, before the bad values
   /// reach the state where it can, and keeps the last good state in any case.
   /// With a hook, the kick and the drift run as two passes with hook->beforeDrift between them.
-  void step(Real dt, StepHook* hook = nullptr);
+  /// outerEnd: the step ends a step of the slow elements (setSlowElements; always true without them).
+  void step(Real dt, StepHook* hook = nullptr, bool outerEnd = true);
+  /// Multi-rate springs, the impulse form of r-RESPA (Tuckerman, Berne & Martyna 1992) over the
+  /// elements: the `slow` ones (slowElements) act as the slow force, a kick of m dt / 2 at each end
+  /// of a step of m chain steps, the others at every chain step. Fused with the leapfrog's kicks this
+  /// is one rule: the force a chain step leaves is the fast elements' plus, where the step ends a
+  /// slow step, m times the slow ones' (so the next kick of dt/2 gives them m dt/2), else nothing of
+  /// them; the synchronised velocity there is then r-RESPA's, and the books close at slow steps'
+  /// ends (in between, the kinetic book lacks the slow half kick still owed). A slow element's
+  /// dashpot dissipates over m dt, its elastic energy is booked at every chain step.
+  /// Empty or m = 1: one rate, the same bits as before. m is also the engine's substeps with one
+  /// rate: the last good state is kept only at a step's end. Call at a slow step's end. A change of
+  /// the split after the first step re-splits the pending kick (resplit; see the .cpp): exact, the
+  /// synchronised velocities and the books stay; without resplit the caller recomputes the forces
+  /// (a state being loaded).
+  void setSlowElements(std::vector<std::uint8_t> slow, int m, bool resplit = true);
+  const std::vector<std::uint8_t>& slowElementMask() const { return slow_; }
   /// Recomputes forces at the current state, and the CPs' strain and tension (Fabric::strain,
   /// Fabric::tension), which step() leaves as they were: call it before reading them, and after
   /// moving nodes by hand.
@@ -143,7 +167,7 @@ class ChainDynamics {
   template <bool Gravity>
   void drift(Real dt, Vec3& momentum);
   template <bool StoreElementState>
-  void springForces(Real dt);
+  void springForces(Real dt);  // slow elements weighted by slowNow_
   void finishLoads(Real dt);
   void computeForces(Real dt);  // springForces + finishLoads: forces at the current state
   void start();
@@ -161,6 +185,10 @@ class ChainDynamics {
   Real dtPrev_ = 0;
   Real dtCrit_ = 0;     // criticalTimeStep of the fabric: the engine's dt limit and the blow-up budget
   Breakage breakage_;
+  std::vector<std::uint8_t> slow_;  // per element: 1 slow (multi-rate), empty: one rate
+  int rate_ = 1;                    // chain steps per slow step (1: one rate)
+  int chainSteps_ = 1;              // chain steps per engine step (substeps), multi-rate or not
+  Real slowNow_ = 1;                // weight of the slow elements' forces the next springForces leaves
   Vec3Array edge_;     // springForces: force of each chunk's first CP on the node the chunk before assigns
   Vec3Array goodPos_, goodVel_, goodDir_;
   std::vector<Real> goodFlat_, goodStiffness_, goodDamping_;

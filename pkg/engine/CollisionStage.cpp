@@ -7,6 +7,7 @@
 #include "geom/SeparatingAxis.hpp"
 #include "law/SectionFlattening.hpp"
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <iterator>
 #include <type_traits>
@@ -618,9 +619,37 @@ Real CollisionStage::resolveAgain(Fabric& f, Real dt, Real horizonLeft) {
   if (contacts_.empty() && bodyContacts_.empty()) return 0;
   const ThreadCountScope threadCount(params_.threads);
   auto t = Clock::now();
+  const Index nc = static_cast<Index>(contacts_.size());
+  const std::uint8_t* again = nullptr;  // the contacts solved again (null: all)
+  if (!slowNode_.empty()) {
+    // Multi-rate springs: a contact whose four nodes are slow moved at constant velocity since the
+    // pass unless an impulse reached it, so it is solved again only within two contacts of a fast
+    // node or of a CP on a body (the impulses of the first ring move the second's nodes); beyond,
+    // the projection takes what is left.
+    nearFast_.resize(f.nNodes());
+    for (Index i = 0; i < f.nNodes(); ++i) nearFast_[i] = !slowNode_[i];
+    for (const BodyContact& c : bodyContacts_) nearFast_[f.elem0[c.cp]] = nearFast_[f.elem0[c.cp] + 1] = 1;
+    again_.resize(static_cast<std::size_t>(nc));
+    const auto nodes = [&](const CPContact& c) {
+      const Index a = f.elem0[c.cpA], b = f.elem0[c.cpB];
+      return std::array<Index, 4>{a, a + 1, b, b + 1};
+    };
+    for (int ring = 0; ring < 2; ++ring) {
+      if (ring == 1)  // the first ring's nodes
+        for (Index k = 0; k < nc; ++k)
+          if (again_[k])
+            for (Index i : nodes(contacts_[k])) nearFast_[i] = 1;
+      for (Index k = 0; k < nc; ++k) {
+        const auto q = nodes(contacts_[k]);
+        again_[k] = nearFast_[q[0]] | nearFast_[q[1]] | nearFast_[q[2]] | nearFast_[q[3]];
+      }
+    }
+    again = again_.data();
+  }
   // A contact of a CP broken since the pass gets no push: infinite room (its row stays at 0).
-  parallelFor(static_cast<Index>(contacts_.size()), 256, threads(), [&](Index k) {
+  parallelFor(nc, 256, threads(), [&](Index k) {
     CPContact& c = contacts_[k];
+    if (again && !again[k]) return;
     if (!f.alive[c.cpA] || !f.alive[c.cpB]) c.gap = INFINITY;
     else remeasure(f, c, params_.rule, false);
   });
@@ -629,7 +658,7 @@ Real CollisionStage::resolveAgain(Fabric& f, Real dt, Real horizonLeft) {
     else remeasureBody(f, bodies[c.body], c);
   }
   ImpulseReport rep;
-  law_.resolve(f, contacts_, capacityOf(f), dt, params_, rep, bodyContacts_, &bodies, horizonLeft);
+  law_.resolve(f, contacts_, capacityOf(f), dt, params_, rep, bodyContacts_, &bodies, horizonLeft, again);
   bodyWork_ += rep.bodyWork;
   frictionWork_ += rep.frictionWork;
   stats.seconds[3] += since(t);

@@ -92,7 +92,12 @@ class CollisionStage : public StepHook {
   /// again over what is left of the horizon, so that the springs between two passes cannot push a
   /// contact in (with the rows of the pass start only, the projection took it out and put 2-7 J
   /// into the compare's 5 J sphere scene). Returns the energy the impulses added [J].
+  /// With slow nodes (setSlowNodes), only the contacts within two contacts of a fast node or a body
+  /// are measured and solved again: the others' nodes have moved at constant velocity since the pass
+  /// (multi-rate springs), which solved them for the whole step.
   Real resolveAgain(Fabric& f, Real dt, Real horizonLeft);
+  /// Per node: 1 where only slow elements join it (FabricEngine::setMultiRate); empty: none.
+  void setSlowNodes(std::vector<std::uint8_t> slow) { slowNode_ = std::move(slow); }
   /// The bodies drift over dt; then the restitution pass (after the pass's first substep: on the
   /// rows of the pass, whose approach it reverses) and the position projection (after its last).
   Real afterDrift(Fabric& f, Real dt, bool restitute, bool project);
@@ -223,6 +228,7 @@ class CollisionStage : public StepHook {
   std::vector<long> sectionStamp_;  // per CP: narrow phase in which its sections last changed
   long cacheClock_ = 0;
   bool pairsChanged_ = false;
+  std::vector<std::uint8_t> slowNode_, nearFast_, again_;  // resolveAgain: slow nodes, the marks, the contacts solved
   ImpulseLaw law_;
   PositionProjection projector_;
   Real projectionEnergy_ = 0;

@@ -40,13 +40,14 @@ void FabricEngine::step(Real dt) {
     throw ParameterError("dt", fmt(dt), "(0, " + std::string(substeps_ > 1 ? "substeps x " : "") + "dt_crit = " + fmt(dtMax) +
                                             "] s (stable limit of the chain; set O.dt below it)");
   if (substeps_ == 1) return dynamics_.step(dt, collisions_.get());
+  if (multiRate_ && dt != ratesDt_) applyRates(dt);
   const Real h = dt / substeps_;
   if (!collisions_) {
-    for (int k = 0; k < substeps_; ++k) dynamics_.step(h, nullptr);
+    for (int k = 0; k < substeps_; ++k) dynamics_.step(h, nullptr, k == substeps_ - 1);
     return;
   }
   SubstepHook hook(*collisions_, dt, substeps_);
-  for (hook.k = 0; hook.k < substeps_; ++hook.k) dynamics_.step(h, &hook);
+  for (hook.k = 0; hook.k < substeps_; ++hook.k) dynamics_.step(h, &hook, hook.k == substeps_ - 1);
 }
 
 void FabricEngine::setSubsteps(int m) {
@@ -54,6 +55,30 @@ void FabricEngine::setSubsteps(int m) {
   if (m > 1 && collisions_ && !CollisionStage::allowsSubsteps(collisions_->params()))
     throw ParameterError("substeps", std::to_string(m), CollisionStage::kSubstepsRange);
   substeps_ = m;
+  applyRates(0);  // one rate until the next step chooses the slow elements for its dt
+}
+
+void FabricEngine::setMultiRate(bool on) {
+  multiRate_ = on;
+  applyRates(0);
+}
+
+void FabricEngine::applyRates(Real dt, bool resplit) {
+  const Fabric& f = *fabric_;
+  std::vector<std::uint8_t> slow;
+  if (multiRate_ && substeps_ > 1 && dt > 0) slow = slowElements(f, dt);
+  ratesDt_ = dt;
+  dynamics_.setSlowElements(slow, substeps_, resplit);
+  if (!collisions_) return;
+  // A node is slow when every element it joins is: then only impulses change its velocity between
+  // two passes.
+  std::vector<std::uint8_t> slowNode;
+  if (!dynamics_.slowElementMask().empty()) {
+    slowNode.assign(f.nNodes(), 1);
+    for (Index e = 0; e < f.nElems(); ++e)
+      if (!dynamics_.slowElementMask()[e]) slowNode[f.elem0[e]] = slowNode[f.elem0[e] + 1] = 0;
+  }
+  collisions_->setSlowNodes(std::move(slowNode));
 }
 
 void FabricEngine::enableCollisions(const ContactParams& p, BroadPhase broad) {
@@ -63,6 +88,7 @@ void FabricEngine::enableCollisions(const ContactParams& p, BroadPhase broad) {
   if (!collisions_) collisions_ = std::make_unique<CollisionStage>(p, broad);
   collisions_->setParams(p);
   collisions_->broadPhase = broad;
+  applyRates(ratesDt_);  // the stage learns the slow nodes
 }
 
 KinematicState FabricEngine::state() const {
@@ -142,6 +168,9 @@ void FabricEngine::setState(const KinematicState& s) {
     f.stiffness[e] = s.alive[e] ? K : 0.0;
     f.damping[e] = s.alive[e] ? m.dampingRatio * std::sqrt(K * me) : 0.0;
   }
+  // Multi-rate: the split of the step that saved the state (substeps x its last chain step), so that
+  // restore's forces are the ones that run left.
+  if (multiRate_) applyRates(substeps_ * s.lastDt, false);
   dynamics_.restore(s.step, s.time, s.lastDt, s.books, s.booksStarted, s.springSeen, s.breakage);
   if (collisions_) collisions_->invalidateCache();
 }

@@ -122,6 +122,7 @@ std::string engineSnapshot(FabricEngine& e) {
   putBreakEvents(o, s.breakage.log);
   // Spring substeps only when set: a snapshot of a plain engine has the bytes it had before them.
   if (e.substeps() > 1) o.put(static_cast<std::int32_t>(e.substeps()));
+  if (e.substeps() > 1 && e.multiRate()) o.put(std::uint8_t(1));  // multi-rate springs only when on: the same rule
   o.put(fnv64(o.b.data(), o.b.size()));
   // As saveState: both this run and the restored one test every pair at their next step.
   if (CollisionStage* c = e.collisions()) c->invalidateCache();
@@ -212,12 +213,16 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
   s.breakage.params = in.get<BreakageParams>(), in.vec(s.breakage.strength), in.vec(s.breakage.filtered);
   getBreakEvents(in, s.breakage.log);
   int substeps = 1;
-  if (in.b.size() - in.at == sizeof(std::int32_t)) {
+  bool multiRate = false;
+  if (const std::size_t left = in.b.size() - in.at; left == sizeof(std::int32_t) || left == sizeof(std::int32_t) + 1) {
     substeps = in.get<std::int32_t>();
     if (substeps < 2 || substeps > 64) In::fail("substeps outside [2, 64]");
+    if (left > sizeof(std::int32_t) && in.get<std::uint8_t>() != 1) In::fail("multi-rate flag other than 1");
+    multiRate = left > sizeof(std::int32_t);
   }
   if (in.at != in.b.size()) In::fail("trailing bytes");
   if (substeps > 1) e->setSubsteps(substeps);
+  e->setMultiRate(multiRate);  // before setState: it chooses the slow elements the state was saved with
   e->setState(s);  // checks everything (topology fingerprint, ranges) and puts clock, books, breaks back
   return e;
 }

@@ -65,7 +65,7 @@ Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies) {
 
 void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, const Capacity& capacity, Real dt,
                          const ContactParams& p, ImpulseReport& rep, const std::vector<BodyContact>& bodyContacts,
-                         std::vector<RigidBody>* bodies, Real horizon) {
+                         std::vector<RigidBody>* bodies, Real horizon, const std::uint8_t* only) {
   rep = ImpulseReport{};
   const Real H = horizon > 0 ? horizon : dt;  // the drift the rooms are shared over
   loadBodies(bodies);
@@ -81,6 +81,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   parallelFor(nc, 256, threads(), [&](Index c) {
     Row& r = slots_[c];
     hasRow_[c] = 0;
+    if (only && !only[c]) return;
     nodesAndWeights(f, contacts[c], r.node, r.w);
     r.n = contacts[c].normal;
     r.vn0 = relativeVelocity(f, r.node, r.w).dot(r.n);

@@ -72,10 +72,10 @@ class ImpulseLaw {
   /// Applies the impulses to Fabric::vel (and to the bodies' vel and angVel); dt [s] the step (its
   /// half-kick: the energy books), horizon [s] the drift until the next pass, over which the rows
   /// let a contact close by its room (dt itself, or the contact step of spring substeps:
-  /// FabricEngine::setSubsteps); 0: dt.
+  /// FabricEngine::setSubsteps); 0: dt. only: per contact 1 if it may get a row (null: every one).
   void resolve(Fabric& f, const std::vector<CPContact>& contacts, const Capacity& capacity, Real dt,
                const ContactParams& p, ImpulseReport& report, const std::vector<BodyContact>& bodyContacts = {},
-               std::vector<RigidBody>* bodies = nullptr, Real horizon = 0);
+               std::vector<RigidBody>* bodies = nullptr, Real horizon = 0, const std::uint8_t* only = nullptr);
 
   /// Pass 2 after the drift: restitution e of the rows of the last resolve() (see above). Returns
   /// the fabric's kinetic energy change [J] (0 for e = 0) and adds the bodies' work to *bodyWork.

@@ -92,6 +92,36 @@ TEST(Snapshot, SubstepsRoundTrip) {
   expectSame(*a, *b);
 }
 
+// Multi-rate springs too: an adaptive ply (4 CPs per span near the cube, 1 elsewhere) at 4 substeps,
+// its coarse CPs once per step; the restored engine chooses the same slow elements and continues
+// bit for bit. The flag is one byte after the substeps.
+TEST(Snapshot, MultiRateRoundTrip) {
+  WeaveParams w = km2_706();
+  w.nx = w.ny = 8;
+  w.cpPerSpan = 4, w.cpCoarse = 1, w.fineRadius = 1.5e-3;
+  auto a = std::make_shared<FabricEngine>(buildWeave(w).fabric);
+  ContactParams c;
+  c.skin = 1e-5;
+  a->enableCollisions(c, BroadPhase::Grid);
+  for (const Yarn& y : a->fabric().yarns) a->dynamics().fix(y.firstNode), a->dynamics().fix(y.firstNode + y.nNodes - 1);
+  a->collisions()->bodies.push_back(cubeAbove(a->fabric(), 1.5e-3, 1e-3, 0.2e-3, Vec3(0, 0, -600)));
+  a->setSubsteps(4);
+  const std::size_t single = engineSnapshot(*a).size();
+  a->setMultiRate(true);
+  EXPECT_EQ(engineSnapshot(*a).size(), single + 1);
+  const Real dt = 4 * 0.7 * a->criticalDt();
+  for (int s = 0; s < 40; ++s) a->step(dt);
+  long slow = 0;
+  for (std::uint8_t x : a->dynamics().slowElementMask()) slow += x;
+  EXPECT_GT(slow, 0) << "the coarse CPs are slow";
+  auto b = restoreSnapshot(engineSnapshot(*a));
+  EXPECT_TRUE(b->multiRate());
+  for (int s = 0; s < 60; ++s) a->step(dt), b->step(dt);
+  EXPECT_GT(a->collisions()->stats.bodyContacts, 0);
+  EXPECT_EQ(a->dynamics().slowElementMask(), b->dynamics().slowElementMask());
+  expectSame(*a, *b);
+}
+
 TEST(Snapshot, DamagedBytesAreRefused) {
   auto a = struckPly();
   std::string bytes = engineSnapshot(*a);
