@@ -4,6 +4,7 @@
 #   yade -n -x scripts/bench_adaptive.py [V=200] [cp_fine=4] [cp_coarse=1] [fine_radius=12e-3] [quick=0] [out=DIR]
 #   yade -n -x scripts/bench_adaptive.py shape=sphere size=3e-3 mass=0.25e-3 fine_radius=6e-3   # the sphere scene
 #   yade -n -x scripts/bench_adaptive.py substeps=2       # the adaptive run with 2 spring substeps per contact step
+#   yade -n -x scripts/bench_adaptive.py substeps=4 multirate=1   # ... its coarse CPs once per contact step
 # shape, size and mass go to both runs as ballistic.py's keys (its defaults where not given: the cube).
 # Each run is its own `yade -n -x scripts/ballistic.py` process (out/bench_adaptive/uniform, .../adaptive),
 # run one after the other; both stop at perforation. Reports both residual velocities, the scenes' wall
@@ -31,6 +32,7 @@ p = read_params({
     't_end': (1e-4, 's', 'simulated time at most (both runs stop at perforation)'),
     'quick': (False, '', '1: a 12 mm ply, for a fast check of the pipeline'),
     'substeps': (1, '', 'spring substeps per contact step of the adaptive run (ballistic.py), [1, cp_fine]'),
+    'multirate': (0, '', 'the adaptive run\'s multirate (ballistic.py): 1, its coarse CPs step once per contact step, 0 or 1'),
     'shape': ('box', '', 'projectile, as ballistic.py: ' + ', '.join(SHAPES)),
     'size': (5.59e-3, 'm', "cube edge or sphere diameter, as ballistic.py (given only when set here)"),
     'mass': (1.1e-3, 'kg', 'projectile mass, as ballistic.py (given only when set here)'),
@@ -44,6 +46,8 @@ if not p.fine_radius >= 0:
     raise ValueError('fine_radius = %r is invalid: allowed [0, inf) m' % p.fine_radius)
 if not (isinstance(p.substeps, int) and 1 <= p.substeps <= p.cp_fine):
     raise ValueError('substeps = %r is invalid: allowed an integer in [1, cp_fine = %d]' % (p.substeps, p.cp_fine))
+if p.multirate not in (0, 1):
+    raise ValueError('multirate = %r is invalid: allowed 0 or 1' % (p.multirate,))
 if p.shape not in SHAPES:
     raise ValueError('shape = %r is invalid: allowed %s' % (p.shape, ', '.join(SHAPES)))
 if not 1e-4 <= p.size <= 0.1:
@@ -55,8 +59,10 @@ side = 0.012 if p.quick else p.side
 here = os.path.dirname(os.path.abspath(sys.argv[0]))  # under yade -x, __file__ is yade's own
 common = ['V=%r' % p.V, 'side=%r' % side, 't_end=%r' % p.t_end, 'cp_per_span=%d' % p.cp_fine,
           'vtk_every=-1', 'progress=0', 'shape=%s' % p.shape] + ['%s=%r' % (k, p[k]) for k in ('size', 'mass') if k in p.given]
-runs = {'uniform': ['fine_radius=-1'],
-        'adaptive': ['fine_radius=%r' % p.fine_radius, 'cp_coarse=%d' % p.cp_coarse, 'substeps=%d' % p.substeps]}
+adaptive = ['fine_radius=%r' % p.fine_radius, 'cp_coarse=%d' % p.cp_coarse, 'substeps=%d' % p.substeps]
+runs = {'uniform': ['fine_radius=-1'], 'adaptive': adaptive + ['multirate=%d' % p.multirate]}
+if p.multirate:  # what the multi-rate springs change, measured alongside: the same adaptive run at one rate
+    runs['adaptive_single_rate'] = adaptive + ['multirate=0']
 res = {}
 for name, extra in runs.items():
     sub = os.path.join(d, name)
@@ -87,6 +93,8 @@ speedup_per_step = (u['wall_seconds'] / u['steps']) / (a['wall_seconds'] / a['st
 diff = abs(a['residual_velocity'] - u['residual_velocity']) / u['residual_velocity'] if u['residual_velocity'] > 0 \
     else float('inf')
 measured = {'uniform': u, 'adaptive': a, 'speedup': speedup, 'speedup_cpu': speedup_cpu,
+            'adaptive_single_rate': res.get('adaptive_single_rate'),
+            'speedup_single_rate': u['wall_seconds'] / res['adaptive_single_rate']['wall_seconds'] if p.multirate else None,
             'speedup_per_step': speedup_per_step,
             'cp_ratio': u['cps'] / a['cps'], 'residual_velocity_difference': diff, 'side': side}
 checks = {'speedup': {'value': speedup, 'limit': p.goal_speedup, 'passed': bool(speedup >= p.goal_speedup),
@@ -97,7 +105,7 @@ checks = {'speedup': {'value': speedup, 'limit': p.goal_speedup, 'passed': bool(
                          'passed': u['outcome'] == a['outcome'] == 'perforated', 'what': 'both runs perforate'}}
 units = {'speedup': '', 'speedup_cpu': '', 'residual_velocity_difference': 'fraction of the uniform residual velocity', 'side': 'm',
          'uniform': 'residual_velocity m/s, wall_seconds s, cpu_seconds s, dt s, fine_radius m, phase_seconds s',
-         'adaptive': 'as uniform'}
+         'adaptive': 'as uniform', 'adaptive_single_rate': 'as uniform (multirate=1 only)'}
 write_summary(d, 'bench_adaptive', p, measured, {'goal_speedup': p.goal_speedup, 'goal_residual': p.goal_residual},
               units, 'ok', checks)
 print('bench_adaptive: speed-up %.2fx (CPU time %.2fx; %.2fx per step, %.2fx fewer CPs) at a residual-velocity difference of %.2f %%;'

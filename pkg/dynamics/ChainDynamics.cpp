@@ -92,7 +92,7 @@ void ChainDynamics::configureBreakage(const BreakageParams& p) {
   checkpoint();  // the last good state carries the new breakage state (restoreLastGood puts it back)
 }
 
-void ChainDynamics::setSlowElements(std::vector<std::uint8_t> slow, int m, bool resplit) {
+void ChainDynamics::setSlowElements(std::vector<std::uint8_t> slow, int m) {
   require(m >= 1 && m <= 64, "substeps", m, "[1, 64]");
   require(slow.empty() || static_cast<Index>(slow.size()) == f_.nElems(), "slow_elements", static_cast<double>(slow.size()),
           "empty or one flag per element (" + fmt(f_.nElems()) + ")");
@@ -102,7 +102,7 @@ void ChainDynamics::setSlowElements(std::vector<std::uint8_t> slow, int m, bool 
   if (rate == rate_ && slow == slow_) return;
   slow_ = std::move(slow);
   rate_ = rate;
-  if (!started_ || !resplit) return;
+  if (!started_) return;
   // The force in f_.force serves the next kick's two halves: the last step's closing half, which
   // must keep the old weights, and the next step's opening half, which takes the new. Recompute it
   // with the new weights (the same positions and velocities: only the weights change) and give the

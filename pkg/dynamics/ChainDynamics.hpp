@@ -103,10 +103,9 @@ class ChainDynamics {
   /// dashpot dissipates over m dt, its elastic energy is booked at every chain step.
   /// Empty or m = 1: one rate, the same bits as before. m is also the engine's substeps with one
   /// rate: the last good state is kept only at a step's end. Call at a slow step's end. A change of
-  /// the split after the first step re-splits the pending kick (resplit; see the .cpp): exact, the
-  /// synchronised velocities and the books stay; without resplit the caller recomputes the forces
-  /// (a state being loaded).
-  void setSlowElements(std::vector<std::uint8_t> slow, int m, bool resplit = true);
+  /// the split after the first step re-splits the kick the last step still owes (see the .cpp):
+  /// exact, the synchronised velocities and the books stay.
+  void setSlowElements(std::vector<std::uint8_t> slow, int m);
   const std::vector<std::uint8_t>& slowElementMask() const { return slow_; }
   /// Recomputes forces at the current state, and the CPs' strain and tension (Fabric::strain,
   /// Fabric::tension), which step() leaves as they were: call it before reading them, and after

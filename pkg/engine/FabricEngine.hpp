@@ -42,9 +42,8 @@ class FabricEngine {
   void setSubsteps(int m);
   int substeps() const { return substeps_; }
   /// Multi-rate springs with substeps m > 1 (off: every spring steps at dt / m). The elements stable
-  /// at the step dt (slowElements: the coarse CPs of an adaptive fabric; chosen again when dt
-  /// changes) step once per dt as r-RESPA's slow force (ChainDynamics::setSlowElements), the others
-  /// m times.
+  /// at the longest step accepted, m x dt_crit (slowElements: the coarse CPs of an adaptive fabric),
+  /// step once per dt as r-RESPA's slow force (ChainDynamics::setSlowElements), the others m times.
   /// Between two passes the nodes of slow elements alone then move at constant velocity but for
   /// impulses, so a later substep solves again only the rows near a fast node or a body
   /// (CollisionStage::setSlowNodes); the rest were solved for the whole step by the pass.
@@ -80,10 +79,8 @@ class FabricEngine {
   std::unique_ptr<CollisionStage> collisions_;
   int substeps_ = 1;
   bool multiRate_ = false;
-  Real ratesDt_ = 0;  // the step the slow elements were chosen for (0: none chosen)
-  // The slow elements for steps of dt (none: dt = 0, one rate, or m = 1) and their nodes, to the
-  // dynamics (resplit: ChainDynamics::setSlowElements) and the collision stage.
-  void applyRates(Real dt, bool resplit = true);
+  // The slow elements of (substeps_, multiRate_) and their nodes, to the dynamics and the stage.
+  void applyRates();
 };
 
 }  // namespace woven

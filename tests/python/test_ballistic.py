@@ -197,6 +197,25 @@ def test_bad_substeps_name_the_key(tmp_path, args):
     assert rc != 0 and 'substeps = ' in log and 'allowed' in log
 
 
+def test_bad_multirate_names_the_key(tmp_path):
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', 'multirate=2')
+    assert rc != 0 and 'multirate = ' in log and 'allowed' in log
+
+
+def test_multirate_on_an_adaptive_ply(tmp_path):
+    # 12.7 mm ply, 4 CPs per span within 3 mm of the impact, 1 outside, 4 substeps with the coarse
+    # CPs once per YADE step: the books close, the yarns and the sphere stay apart within 0.1
+    # thickness, and the summary says multi-rate was on.
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.0127', 'cp_per_span=4', 'fine_radius=3e-3', 'cp_coarse=1',
+                           'substeps=4', 'multirate=1', 't_end=8e-6', 'shape=sphere', 'size=2.5e-3', 'mass=6.4e-5',
+                           'V=400', 'stop=0')
+    assert rc == 0, log[-3000:]
+    m = s['measured']
+    assert m['multirate'] == 1 and m['fabric_steps'] == 4 * m['steps']
+    assert abs(m['energy_balance_error']) < 0.01
+    assert m['overlap']['yarn_max_rel'] < 0.1 and m['overlap']['body_max_rel'] < 0.1
+
+
 def test_substeps_meet_the_contacts_once_per_step(tmp_path):
     # 12.7 mm ply at 2 CPs per span, 2 substeps: YADE's step is twice the springs' (2 x 0.7 dt_crit),
     # the run keeps its books and overlaps, and the fabric took two chain steps per YADE step.
