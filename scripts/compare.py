@@ -12,7 +12,8 @@
 #                    fine_radius = each of `fine_radii` x the projectile's size; only at 2 CPs per span or more
 # Both impulse methods also run with spring substeps (ballistic.py `substeps`, multiple time stepping):
 # s = 2, 4 up to the case's CPs per span, the contacts then once per s spring steps (s = CPs per span:
-# at the rate of a 1-CP ply).
+# at the rate of a 1-CP ply). The adaptive cases with substeps run twice: every CP at the substep, and
+# multi-rate (ballistic.py multirate=1: the coarse CPs once per step, docs/design.md).
 #   paper            woven as the paper: SAT normal, depth on the sections, impulses (Eq. 5) (contact_model=paper)
 #   penalty          the paper's OBB/SAT geometry, penalty forces k_p * overlap instead of impulses
 #   no_flattening    the paper's method, sections never flatten
@@ -118,20 +119,22 @@ else:
     STIFF_KEEP = {}
 
 
-def case_name(method, res, dt, k, sub=1):
-    tail = '' if sub == 1 else '_s%d' % sub
+def case_name(method, res, dt, k, sub=1, mr=0):
+    tail = ('' if sub == 1 else '_s%d' % sub) + ('_mr' if mr else '')
     if method == 'impulse_adaptive':
         return '%s_cp%d_dt%g_r%g%s' % (method, res, dt, k, tail)
     return '%s_cp%d_dt%g%s%s' % (method, res, dt, '' if k is None else '_k%g' % k, tail)
 
 
-def keys_of(method, res, dt, k, sub=1):
+def keys_of(method, res, dt, k, sub=1, mr=0):
     extra, kkey, _ = METHODS[method]
     q = dict(SCENE)
     q.update(extra)
     q['cp_per_span'] = res
     if sub > 1:
         q['substeps'] = sub
+    if mr:
+        q['multirate'] = 1
     q[DT_KEY.get(method, 'safety')] = dt
     if kkey is not None:
         q[kkey] = k
@@ -179,8 +182,10 @@ for method, (extra, kkey, ks) in METHODS.items():
                 if sub > res:
                     continue
                 for dt in DTS:
-                    cases.append((method, res, dt, k, sub))
-ref_case = ('impulse', REF_RES, min(DTS) / 2, None, 1)
+                    cases.append((method, res, dt, k, sub, 0))
+                    if method == 'impulse_adaptive' and sub > 1:  # its coarse CPs once per step (multirate)
+                        cases.append((method, res, dt, k, sub, 1))
+ref_case = ('impulse', REF_RES, min(DTS) / 2, None, 1, 0)
 cases.insert(0, ref_case)
 t_all = time.time()
 results = {}
@@ -201,9 +206,10 @@ dv_ref = p.V - ref['v_end']
 rows = []
 for c in cases:
     f = ballistic_figures(results[c])
-    method, res, dt, k, sub = c
+    method, res, dt, k, sub, mr = c
     adaptive = method == 'impulse_adaptive'
-    row = {'method': method, 'cp_per_span': res, 'dt_over_dt_crit': dt, 'substeps': sub, 'stiffness': None if adaptive else k,
+    row = {'method': method, 'cp_per_span': res, 'dt_over_dt_crit': dt, 'substeps': sub, 'multirate': mr,
+           'stiffness': None if adaptive else k,
            'fine_radius': k if adaptive else None, 'reference': c == ref_case}
     if f is None:
         row.update({'status': 'crashed'})
@@ -217,7 +223,7 @@ for c in cases:
                     'dt': f['dt'], 'cps': f['cps'], 'broken': f['broken']})
     rows.append(row)
 
-COLS = ['method', 'cp_per_span', 'dt_over_dt_crit', 'substeps', 'stiffness', 'fine_radius', 'status', 'v_end', 'velocity_error',
+COLS = ['method', 'cp_per_span', 'dt_over_dt_crit', 'substeps', 'multirate', 'stiffness', 'fine_radius', 'status', 'v_end', 'velocity_error',
         'max_yarn_penetration', 'max_body_penetration', 'energy_error', 'wall_per_us', 'dt', 'cps', 'broken', 'reference']
 
 
@@ -233,7 +239,8 @@ with atomic_open(os.path.join(d, 'table.md')) as f:
     for r in rows:
         mm = lambda v: '' if v is None or not isinstance(v, float) else '%.3f' % (1e3 * v)  # noqa: E731
         f.write('| %s%s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' % (
-            r['method'], ' (reference)' if r['reference'] else '', r['cp_per_span'], fmt(r['dt_over_dt_crit']), r['substeps'],
+            r['method'], ' (reference)' if r['reference'] else '', r['cp_per_span'], fmt(r['dt_over_dt_crit']),
+            '%d%s' % (r['substeps'], ' multi-rate' if r['multirate'] else ''),
             fmt(r['stiffness']) or '–', mm(r['fine_radius']) or '–', fmt(r.get('cps')), r['status'], fmt(r.get('v_end')),
             '' if r.get('velocity_error') is None else '%.2f %%' % (100 * r['velocity_error']),
             mm(r.get('max_yarn_penetration')), mm(r.get('max_body_penetration')),
@@ -307,7 +314,7 @@ grid_runs = [r for r in rows if r['method'] == 'yade_grid' and good(r)]
 
 def name_of(r):
     return case_name(r['method'], r['cp_per_span'], r['dt_over_dt_crit'],
-                     r['fine_radius'] if r['method'] == 'impulse_adaptive' else r['stiffness'], r['substeps'])
+                     r['fine_radius'] if r['method'] == 'impulse_adaptive' else r['stiffness'], r['substeps'], r['multirate'])
 
 
 def matched(grid, pool, strict):
@@ -362,7 +369,7 @@ for a, (key, label, scale) in zip(ax, panels):
         for r, xi, yi in zip(pts, x, y):
             a.annotate('%d%s%s%s' % (r['cp_per_span'], '' if r['stiffness'] is None else ' k%.0e' % r['stiffness'],
                                      '' if r['fine_radius'] is None else ' r%.1f mm' % (1e3 * r['fine_radius']),
-                                     '' if r['substeps'] == 1 else ' s%d' % r['substeps']),
+                                     ('' if r['substeps'] == 1 else ' s%d' % r['substeps']) + (' mr' if r['multirate'] else '')),
                        (xi, yi), fontsize=6, xytext=(3, 2), textcoords='offset points')
     a.set_xscale('log')
     a.set_yscale('log')

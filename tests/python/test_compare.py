@@ -114,3 +114,17 @@ def test_smith_error_of_woven_chain_is_small(quick):
 def test_bad_method_names_the_key(tmp_path):
     rc, log, s = run_scene('compare.py', tmp_path, 'methods=impulse,magic')
     assert rc != 0 and 'methods = ' in log and 'allowed' in log
+
+
+def test_adaptive_substep_cases_also_run_multi_rate(quick):
+    out, rc, log, s = quick
+    rows = s['measured']['rows']
+    key = lambda r: (r['cp_per_span'], r['dt_over_dt_crit'], r['fine_radius'], r['substeps'])  # noqa: E731
+    adaptive = [r for r in rows if r['method'] == 'impulse_adaptive' and r['substeps'] > 1]
+    twins = [r for r in adaptive if r['multirate']]
+    # each adaptive case with substeps has its multi-rate twin, and nothing else is multi-rate
+    assert twins and sorted(map(key, twins)) == sorted(key(r) for r in adaptive if not r['multirate'])
+    assert not [r for r in rows if r['multirate'] and r not in twins]
+    for r in twins:
+        assert r['status'] == 'ok' and r['energy_error'] < 0.01, r
+        assert r['max_yarn_penetration'] < 0.1 * 0.11e-3 and r['max_body_penetration'] < 0.1 * 0.11e-3, r
