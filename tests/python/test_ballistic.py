@@ -212,6 +212,7 @@ def test_multirate_on_an_adaptive_ply(tmp_path):
     assert rc == 0, log[-3000:]
     m = s['measured']
     assert m['multirate'] == 1 and m['fabric_steps'] == 4 * m['steps']
+    assert m['contact_step_travel_rel'] == pytest.approx(400 * m['dt'] / m['yarn_thickness'], rel=1e-12)
     assert abs(m['energy_balance_error']) < 0.01
     assert m['overlap']['yarn_max_rel'] < 0.1 and m['overlap']['body_max_rel'] < 0.1
 
