@@ -536,6 +536,7 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt, Real horizon) {
   const bool flattens = params_.flattening != Flattening::None;
   const bool penalty = params_.response == Response::Penalty;
   if (springs) restoreSections(f);
+  againStale_ = true;  // new contacts: resolveAgain marks them afresh
   refit(f, horizon);
   stats.seconds[0] += since(t);
   if (params_.yarnContacts) broad(f);
@@ -621,11 +622,12 @@ Real CollisionStage::resolveAgain(Fabric& f, Real dt, Real horizonLeft) {
   auto t = Clock::now();
   const Index nc = static_cast<Index>(contacts_.size());
   const std::uint8_t* again = nullptr;  // the contacts solved again (null: all)
-  if (!slowNode_.empty()) {
+  if (!slowNode_.empty() && againStale_) {
     // Multi-rate springs: a contact whose four nodes are slow moved at constant velocity since the
     // pass unless an impulse reached it, so it is solved again only within two contacts of a fast
     // node or of a CP on a body (the impulses of the first ring move the second's nodes); beyond,
-    // the projection takes what is left.
+    // the projection takes what is left. The pass's contacts fix the set: marked once per pass.
+    againStale_ = false;
     nearFast_.resize(f.nNodes());
     for (Index i = 0; i < f.nNodes(); ++i) nearFast_[i] = !slowNode_[i];
     for (const BodyContact& c : bodyContacts_) nearFast_[f.elem0[c.cp]] = nearFast_[f.elem0[c.cp] + 1] = 1;
@@ -644,8 +646,8 @@ Real CollisionStage::resolveAgain(Fabric& f, Real dt, Real horizonLeft) {
         again_[k] = nearFast_[q[0]] | nearFast_[q[1]] | nearFast_[q[2]] | nearFast_[q[3]];
       }
     }
-    again = again_.data();
   }
+  if (!slowNode_.empty()) again = again_.data();
   // A contact of a CP broken since the pass gets no push: infinite room (its row stays at 0).
   parallelFor(nc, 256, threads(), [&](Index k) {
     CPContact& c = contacts_[k];

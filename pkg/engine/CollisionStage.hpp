@@ -97,7 +97,7 @@ class CollisionStage : public StepHook {
   /// (multi-rate springs), which solved them for the whole step.
   Real resolveAgain(Fabric& f, Real dt, Real horizonLeft);
   /// Per node: 1 where only slow elements join it (FabricEngine::setMultiRate); empty: none.
-  void setSlowNodes(std::vector<std::uint8_t> slow) { slowNode_ = std::move(slow); }
+  void setSlowNodes(std::vector<std::uint8_t> slow) { slowNode_ = std::move(slow), againStale_ = true; }
   /// The bodies drift over dt; then the restitution pass (after the pass's first substep: on the
   /// rows of the pass, whose approach it reverses) and the position projection (after its last).
   Real afterDrift(Fabric& f, Real dt, bool restitute, bool project);
@@ -229,6 +229,7 @@ class CollisionStage : public StepHook {
   long cacheClock_ = 0;
   bool pairsChanged_ = false;
   std::vector<std::uint8_t> slowNode_, nearFast_, again_;  // resolveAgain: slow nodes, the marks, the contacts solved
+  bool againStale_ = true;                                 // again_ not yet marked for this pass's contacts
   ImpulseLaw law_;
   PositionProjection projector_;
   Real projectionEnergy_ = 0;
