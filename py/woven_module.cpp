@@ -177,11 +177,11 @@ void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real b
                         bool yarnContacts, Real cacheDistance, const std::string& response, Real penaltyStiffness,
                         Real penaltyDamping, const std::string& flattening, Real sectionStiffness,
                         const std::string& model, int projectionSweeps, Real projectionSlop, Real projectionMaxMove,
-                        const std::string& sweepOrder) {
+                        const std::string& sweepOrder, Real projectionCheck) {
   ContactParams p;
   p.sweepOrder = sweepOrderByName(sweepOrder);
   p.model = contactModelByName(model), p.projectionSweeps = projectionSweeps, p.projectionSlop = projectionSlop;
-  p.projectionMaxMove = projectionMaxMove;
+  p.projectionMaxMove = projectionMaxMove, p.projectionCheck = projectionCheck;
   p.restitution = restitution, p.friction = friction, p.bodyFriction = bodyFriction, p.mcd = mcd, p.rule = sectionRuleByName(rule);
   p.margin = margin, p.tolerance = tolerance, p.maxIterations = maxIterations, p.flattenPasses = flattenPasses;
   p.positionCorrection = positionCorrection, p.correctionSlop = correctionSlop, p.selfExclude = selfExclude;
@@ -210,6 +210,7 @@ bp::dict collisionStats(FabricEngine& e) {
   d["body_overlap_sum"] = s.bodyOverlapSum, d["body_overlap_count"] = s.bodyOverlapCount;
   d["projection_sweeps"] = s.projection.sweeps, d["projection_pushed"] = s.projection.pushed;
   d["projection_step_energy"] = s.projection.energy, d["projection_energy"] = s.projectionEnergy;
+  d["check_pushed"] = s.check.pushed, d["checks"] = s.checks, d["max_checked"] = s.maxChecked;
   d["projection_overlap_left"] = s.projection.overlapLeft;
   d["force_rows"] = s.forces.rows, d["spring_energy"] = s.springEnergy, d["force_dissipated"] = s.forces.dissipated;
   d["seconds_refit"] = s.seconds[0], d["seconds_broad"] = s.seconds[1];
@@ -569,7 +570,7 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("response") = "impulse", bp::arg("penalty_stiffness") = 1e5, bp::arg("penalty_damping") = 0.0,
             bp::arg("flattening") = "geometric", bp::arg("section_stiffness") = 1e4, bp::arg("contact_model") = "gap",
             bp::arg("projection_sweeps") = -1, bp::arg("projection_slop") = 0.5e-6, bp::arg("projection_max_move") = 10e-6,
-            bp::arg("sweep_order") = "sequential"),
+            bp::arg("sweep_order") = "sequential", bp::arg("projection_check") = 2e-6),
            "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction (yarn-yarn) and body_friction "
            "(rigid body-yarn) in [0, 2], 0 with response 'penalty', mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
@@ -581,7 +582,8 @@ BOOST_PYTHON_MODULE(_woven) {
            "(docs/collisions.md), contact_model 'gap' (gap functions, exact gradient rows, position projection) or "
            "'paper' (Sections 4-5), projection_sweeps in [0, 50] or -1 (auto: 8 with 'gap' and 'impulse', else 0), "
            "projection_slop [m] in [0, 1e-3], projection_max_move [m] in (0, 1e-3], sweep_order 'sequential' (contact order; the default) "
-           "or 'coloured' (rows of a colour on the threads). See woven.contact.")
+           "or 'coloured' (rows of a colour on the threads), projection_check [m] in [0, 1e-3] or -1 (contacts still deeper "
+           "after the flattening are projected out before the rows; -1: no check). See woven.contact.")
       .def("disable_collisions", +[](FabricEngine& e) { e.disableCollisions(); })
       .add_property("collisions_enabled", +[](FabricEngine& e) { return e.collisions() != nullptr; })
       .def("settle_sections", +[](FabricEngine& e, int passes) { return stageOf(e).settle(e.fabric(), passes); },

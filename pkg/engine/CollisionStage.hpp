@@ -41,9 +41,10 @@ struct CollisionStats {
   ImpulseReport impulses;     ///< the impulse solve
   NormalForceReport forces;   ///< the penalty / section-spring forces (response penalty, flattening springs)
   Real springEnergy = 0;      ///< energy held in those springs at x_n [J] (1/2 k_p delta^2 + 1/2 k_s (r0 eps)^2)
-  Real penetration = 0;       ///< largest overlap left after flattening, before correction [m]
+  Real penetration = 0;       ///< largest overlap left after flattening and the check, before correction [m]
   Real correctionEnergy = 0;  ///< spring energy the positional correction put in [J] (model Paper)
   ProjectionReport projection;  ///< the position projection after the drift (model Gap)
+  ProjectionReport check;     ///< the check before the rows (PositionProjection; sweeps 0: none this step)
   Real meanPenetration = 0;   ///< mean overlap of the contacts overlapping after flattening [m]
   Index deepestA = -1, deepestB = -1;  ///< the CPs of the deepest of them (-1: none)
   long overlapping = 0;       ///< contacts overlapping after flattening
@@ -62,6 +63,10 @@ struct CollisionStats {
   Real bodyOverlapSum = 0;
   long bodyOverlapCount = 0;
   Real projectionEnergy = 0;  ///< spring energy the position projection put in since the start [J]
+  long checks = 0;            ///< steps whose check moved nodes (ContactParams::projectionCheck)
+  /// Largest overlap (yarn-yarn or CP-body) a check met, before its moves [m]: what the flattening
+  /// left of the last projection's allowance (the overlaps above are measured after the check).
+  Real maxChecked = 0;
   Real maxBodyPenetration = 0;  ///< [m]
   long maxUnresolved = 0;     ///< most unresolved impulse rows in one step
   Real maxResidual = 0;       ///< [m/s]
@@ -195,6 +200,7 @@ class CollisionStage : public StepHook {
   /// The flattening passes; with bodyDt >= 0 (a step's dt) the body contacts flatten the sections
   /// they press too, and are measured again after each pass.
   int flatten(Fabric& f, int maxPasses, Real bodyDt = -1);
+  void checkOverlaps(Fabric& f, Real dt);  // the check before the rows (ContactParams::projectionCheck)
   void measureBodies(const Fabric& f, Real dt);
   std::function<Real(const CPContact&)> capacityOf(const Fabric& f) const;
   bool crossesSteeply(const Fabric& f, const CPContact& c) const;

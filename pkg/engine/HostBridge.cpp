@@ -82,7 +82,7 @@ void toHost(const ContactParams& p, BroadPhase broad, HostStageParams& h) {
   h.sweepOrder = p.sweepOrder == SweepOrder::Coloured ? "coloured" : "sequential";
   h.restitution = p.restitution, h.friction = p.friction, h.bodyFriction = p.bodyFriction, h.tolerance = p.tolerance;
   h.positionCorrection = p.positionCorrection, h.correctionSlop = p.correctionSlop;
-  h.projectionSlop = p.projectionSlop, h.projectionMaxMove = p.projectionMaxMove;
+  h.projectionSlop = p.projectionSlop, h.projectionMaxMove = p.projectionMaxMove, h.projectionCheck = p.projectionCheck;
   h.maxIterations = p.maxIterations, h.projectionSweeps = p.projectionSweeps;
 }
 
@@ -119,7 +119,7 @@ void hostSetStageParams(FabricEngine& e, const HostStageParams& h) {
   p.penaltyStiffness = h.penaltyStiffness, p.penaltyDamping = h.penaltyDamping, p.sectionStiffness = h.sectionStiffness;
   p.restitution = h.restitution, p.friction = h.friction, p.bodyFriction = h.bodyFriction, p.tolerance = h.tolerance;
   p.positionCorrection = h.positionCorrection, p.correctionSlop = h.correctionSlop;
-  p.projectionSlop = h.projectionSlop, p.projectionMaxMove = h.projectionMaxMove;
+  p.projectionSlop = h.projectionSlop, p.projectionMaxMove = h.projectionMaxMove, p.projectionCheck = h.projectionCheck;
   p.maxIterations = h.maxIterations, p.projectionSweeps = h.projectionSweeps;
   e.enableCollisions(p, broad);
 }

@@ -74,7 +74,7 @@ struct HostStageParams {
   // the law (impulses, position projection / correction)
   std::string response, sweepOrder;
   double restitution = 0, friction = 0, bodyFriction = 0, tolerance = 0, positionCorrection = 0, correctionSlop = 0;
-  double projectionSlop = 0, projectionMaxMove = 0;
+  double projectionSlop = 0, projectionMaxMove = 0, projectionCheck = 0;
   int maxIterations = 0, projectionSweeps = 0;
 };
 /// The settings of e's collision stage (collisions off: ContactParams' defaults, collisions = false).

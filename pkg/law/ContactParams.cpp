@@ -69,6 +69,8 @@ void ContactParams::validate() const {
           "[0, 1e-3] m");
   require(std::isfinite(projectionMaxMove) && projectionMaxMove > 0 && projectionMaxMove <= 1e-3, "projection_max_move",
           projectionMaxMove, "(0, 1e-3] m");
+  require(projectionCheck == -1 || (std::isfinite(projectionCheck) && projectionCheck >= 0 && projectionCheck <= 1e-3),
+          "projection_check", projectionCheck, "[0, 1e-3] m, or -1 (no check)");
   require(selfExclude >= 1, "self_exclude", selfExclude, "[1, inf) elements (1: CPs sharing a node)");
 }
 

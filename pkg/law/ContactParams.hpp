@@ -58,6 +58,10 @@ struct ContactParams {
   /// step's motion allows are listed as contacts, so a move never carries a node into an unlisted
   /// neighbour). 10 um, a tenth of a KM2 yarn's thickness.
   Real projectionMaxMove = 10e-6;
+  /// The check [m] (PositionProjection): contacts still deeper than this after the flattening
+  /// passes are projected (no allowance) before the rows; -1: no check. In [0, 1e-3] or -1; acts
+  /// where the projection does (projectionSweepCount() > 0). 2 um, 0.018 of a KM2 yarn's thickness.
+  Real projectionCheck = 2e-6;
   /// The sweeps the projection makes with these parameters.
   int projectionSweepCount() const {
     if (projectionSweeps >= 0) return projectionSweeps;

@@ -9,16 +9,23 @@ namespace woven {
 
 void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
                                  std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop,
-                                 Real maxMove, SectionRule rule, Real dt, ProjectionReport& rep, SweepOrder order) {
+                                 Real maxMove, SectionRule rule, Real dt, ProjectionReport& rep, SweepOrder order,
+                                 Real checkDepth) {
   rep = ProjectionReport{};
+  const bool check = checkDepth >= 0;
+  // A check's moves count against the travel of the projection after the same step's drift.
+  const bool carry = !check && checked_ && travel_.size() == static_cast<std::size_t>(f.nNodes());
+  checked_ = check;
+  if (!carry) travel_.assign(f.nNodes(), 0);
   if (sweeps <= 0 || (contacts.empty() && bodyContacts.empty())) return;
   const Index nc = static_cast<Index>(contacts.size());
-  allowance_.assign(contacts.size(), NAN);
+  // The check comes after the flattening passes: it leaves them nothing.
+  allowance_.assign(contacts.size(), check ? Real(0) : Real(NAN));
   outcome_.resize(contacts.size());
   // After the first sweep only the contacts with a node (or a body) moved in the sweep before can
-  // have changed: the others are skipped (most of a ply is at rest).
+  // have changed: the others are skipped (most of a ply is at rest). The check's first sweep takes
+  // only the contacts deeper than checkDepth.
   movedNow_.assign(f.nNodes(), 0);
-  travel_.assign(f.nNodes(), 0);
   origin_.resize(f.pos.size());
   // The contacts by colour: those of a colour share no node (law/RowColouring), and a contact reads
   // and moves only its own four nodes, so a colour's contacts are projected at once on the threads
@@ -37,7 +44,7 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     const CPContact& c = contacts[q];
     slots_[k] = {q, c.cpA, c.cpB, f.elem0[c.cpA], f.elem0[c.cpB]};
   });
-  bool bodyMoved = true;
+  bool bodyMoved = !check;
   // The share of a move that moves no node more than maxMove, nor any node more than
   // kTravel x maxMove in all: moves beyond would carry a node into neighbours no contact was listed
   // for (the stage lists the pairs within that much more than the step's motion).
@@ -64,9 +71,11 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
   };
   movedAny_.assign(f.nNodes(), 0);
   // One contact's move; returns the overlap beyond allowance + slop it took out (0: no move) [m].
-  const auto projectOne = [&](const Slot& slot, bool all) -> Real {
+  const auto projectOne = [&](const Slot& slot, bool first) -> Real {
     const Index i = slot.i, j = slot.j, q = slot.q;
-    if (!all && !(movedBefore(i) || movedBefore(i + 1) || movedBefore(j) || movedBefore(j + 1))) return 0;
+    if (first ? check && !(contacts[q].gap < -checkDepth)
+            : !(movedBefore(i) || movedBefore(i + 1) || movedBefore(j) || movedBefore(j + 1)))
+      return 0;
     if (!f.alive[slot.cpA] || !f.alive[slot.cpB]) return 0;  // broken in this step
     CPContact& c = contacts[q];
     remeasure(f, c, rule, false);
@@ -88,26 +97,26 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
   for (int sweep = 0; sweep < sweeps; ++sweep) {
     ++rep.sweeps;
     bool moved = false, bodyMovedNow = false;
-    const bool all = sweep == 0;
+    const bool first = sweep == 0;
     movedBefore_.swap(movedNow_);
     movedNow_.assign(f.nNodes(), 0);
     rep.overlapLeft = 0;
-    // The first sweep measures every contact: its colours on the threads. The later ones skip
-    // most contacts on their slot alone: on one thread, in the same order (the same bits; a
+    // The first sweep measures every contact (a check's, only its seeds): its colours on the
+    // threads. The later ones skip most contacts on their slot alone: on one thread, in the same order (the same bits; a
     // barrier per colour would cost more than the work where the cores are busy).
     for (int col = 0; col < colouring_.colours(); ++col) {
       const Index b = colouring_.begin(col);
-      parallelFor(colouring_.begin(col + 1) - b, kContactGrain, all ? nThreads : 1,
-                  [&](Index k) { outcome_[b + k] = projectOne(slots_[b + k], all); });
+      parallelFor(colouring_.begin(col + 1) - b, kContactGrain, first && !check ? nThreads : 1,
+                  [&](Index k) { outcome_[b + k] = projectOne(slots_[b + k], first); });
     }
     // The colouring's tail (a contact that found no colour free) in order.
-    for (Index k = colouring_.begin(RowColouring::kColours); k < nc; ++k) outcome_[k] = projectOne(slots_[k], all);
+    for (Index k = colouring_.begin(RowColouring::kColours); k < nc; ++k) outcome_[k] = projectOne(slots_[k], first);
     for (Real left : outcome_)
       if (left > 0) ++rep.pushed, moved = true, rep.overlapLeft = std::max(rep.overlapLeft, left);
     for (BodyContact& c : bodyContacts) {
       if (!f.alive[c.cp]) continue;
       const Index i = f.elem0[c.cp];
-      if (!all && !bodyMoved && !(movedBefore(i) || movedBefore(i + 1))) continue;
+      if (first ? check && !(c.gap < -checkDepth) : !bodyMoved && !(movedBefore(i) || movedBefore(i + 1))) continue;
       RigidBody& b = bodies[c.body];
       remeasureBody(f, b, c);
       const Real C = c.gap + slop;
@@ -136,13 +145,16 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     bodyMoved = bodyMovedNow;
     if (!moved) break;
   }
-  rep.energy = bookedEnergy(f, dt);
+  // A check moves x_n after its forces made the kick: the drift then misses -dF . dx / 2 (the
+  // projection after the drift: +dF . dx / 2). dx is taken with the velocities before the rows.
+  rep.energy = bookedEnergy(f, check ? -dt : dt);
 }
 
 // The energy the moves put in [J], over the CPs with a moved node, in CP order: their spring energy
 // after minus before, and the step's kinetic energy that their changed forces make: velocity Verlet
 // takes the forces at the moved positions over the whole drift (dKE = (F_n + F_{n+1})/2 . dx), so
-// the moves change F_{n+1} by dF, and the kinetic energy by dF . dx / 2, dx = dt v.
+// the moves change F_{n+1} by dF, and the kinetic energy by dF . dx / 2, dx = dt v (dt < 0: the
+// moves of a check, before the drift, change F_n instead).
 Real PositionProjection::bookedEnergy(Fabric& f, Real dt) {
   elems_.clear();
   for (Index k = 0; k < f.nNodes(); ++k) {

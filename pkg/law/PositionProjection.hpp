@@ -13,6 +13,14 @@
 // their changed forces make (dF . dx / 2 over the drift dx = dt v). The contacts are swept colour by
 // colour (law/RowColouring: a colour's contacts share no node, so they move at once on the threads),
 // the body contacts last, in order: the same bits on any thread count.
+//
+// The check (`checkDepth` >= 0, CollisionStage::beforeDrift): the same projection once more at the
+// step's start, after the flattening passes, with no allowance (flattening has had its turn), seeded
+// by the contacts still deeper than checkDepth. What the projection after the last drift left to
+// the flattening and the flattening did not take (its measure changed under it: a piece turning
+// from crossing to side by side, a closest point moving onto a rounder section) is taken out before
+// the rows act on it. Its moves share each node's travel with the projection after this step's
+// drift, so both together stay within the listing's reach.
 #pragma once
 #include "fabric/Fabric.hpp"
 #include "geom/BodyContact.hpp"
@@ -45,9 +53,13 @@ class PositionProjection {
   /// overlap, say a whipping broken end's, is taken out over a few steps instead of throwing the
   /// nodes into neighbours no contact was listed for; measured on a perforated 8 mm ply: 3 x halved
   /// the mean overlap of 1 x, 10 x injected 5 times the energy).
+  /// checkDepth >= 0: the check before the drift (see above): the first sweep takes only the
+  /// contacts whose gap (as last measured) is below -checkDepth, the allowance is not asked, and the
+  /// energy is booked for moves made before the drift.
   void project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
                std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop, Real maxMove,
-               SectionRule rule, Real dt, ProjectionReport& report, SweepOrder order = SweepOrder::Coloured);
+               SectionRule rule, Real dt, ProjectionReport& report, SweepOrder order = SweepOrder::Coloured,
+               Real checkDepth = -1);
 
  private:
   /// Contacts of a colour below which it is projected on one thread.
@@ -62,7 +74,8 @@ class PositionProjection {
   RowColouring colouring_;            // of the contacts, by their four nodes
   std::vector<Index> elems_;          // the CPs with a moved node, in order
   std::vector<std::uint8_t> movedBefore_, movedNow_, movedAny_;  // per node: moved in the sweep before / in this one / at all
-  std::vector<Real> travel_;                          // per node: distance moved in this call [m]
+  std::vector<Real> travel_;                          // per node: distance moved in this call (and the check before it) [m]
+  bool checked_ = false;                              // a check ran since the last projection: travel_ carries its moves
   Vec3Array origin_;                                  // per moved node: its position before the projection
   Vec3Array forceBefore_;                             // per element of elems_: its spring force before the moves
 };

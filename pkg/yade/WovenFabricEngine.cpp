@@ -51,6 +51,7 @@ void reportToPython(const char* kind, const std::exception& e, long step, long n
 	F(law, projectionSweeps, projectionSweeps, "projection_sweeps")                                                             \
 	F(law, projectionSlop, projectionSlop, "projection_slop")                                                                   \
 	F(law, projectionMaxMove, projectionMaxMove, "projection_max_move")                                                         \
+	F(law, projectionCheck, projectionCheck, "projection_check")                                                                \
 	F(law, positionCorrection, positionCorrection, "position_correction")                                                       \
 	F(law, correctionSlop, correctionSlop, "correction_slop")
 

@@ -93,6 +93,7 @@ public:
 		((int, projectionSweeps, -1, , "Sweeps of the position projection after the drift, in [0, 50], or -1 (auto: 8 with model 'gap' and response 'impulse', else 0)."))
 		((Real, projectionSlop, 0.5e-6, , "Overlap the projection leaves alone [m], in [0, 1e-3]."))
 		((Real, projectionMaxMove, 10e-6, , "Most one contact moves a node in a projection [m], in (0, 1e-3]."))
+		((Real, projectionCheck, 2e-6, , "Contacts still deeper than this after the flattening are projected out before the rows [m], in [0, 1e-3]; -1: no check."))
 		((Real, positionCorrection, 0.2, , "Model 'paper': fraction of a residual overlap removed per step, in [0, 1]."))
 		((Real, correctionSlop, 0.5e-6, , "Model 'paper': overlap the positional correction leaves alone [m] >= 0."))
 	);

@@ -36,6 +36,8 @@ CONTACT_KEYS = {
                           'and response=impulse, else 0); >= 1 is refused with contact_model=paper or response=penalty'),
     'projection_slop': (0.5e-6, 'm', 'overlap the position projection leaves alone, in [0, 1e-3]'),
     'projection_max_move': (10e-6, 'm', 'most one contact moves a node in the position projection (3x this in all), in (0, 1e-3] (deep overlaps go out over a few steps)'),
+    'projection_check': (2e-6, 'm', 'contacts still deeper than this after the flattening passes are projected out before the rows '
+                         '(what the last projection left to a flattening that did not take it), in [0, 1e-3]; -1: no check'),
     'sweep_order': ('sequential', '', "row order of the impulse and projection sweeps: 'sequential' (contact order, serial; the default) "
                     "or 'coloured' (rows that share no node at once on the threads, colour by colour); the same bits for any thread count in either"),
     'yarn_contacts': (True, '', 'contacts between yarns (False: only with rigid bodies; yarns pass through each other)'),

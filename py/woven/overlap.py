@@ -1,10 +1,13 @@
 """Overlap between yarns and between the projectile and the yarns, as every scene reports it.
 
 The energy books cannot see yarns passing into each other, so every scene measures the overlap:
-the depth of the contacts that still overlap after the step's flattening, on the contact model's
-own gap functions (docs/collisions.md), relative to the yarn thickness. `OverlapMeter.sample()` is
-called once per step; `summary()` gives the largest and mean overlaps (the mean over the contacts
-in overlap and over the steps) and the energy the position projection put in.
+the depth of the contacts that still overlap after the step's flattening and its check (the
+projection of what the flattening left, before the rows), on the contact model's own gap functions
+(docs/collisions.md), relative to the yarn thickness. `OverlapMeter.sample()` is called once per
+step; `summary()` gives the largest and mean overlaps (the mean over the contacts in overlap and
+over the steps), the energy the position projection put in (the check's moves included), and what
+the check met: the largest overlap the flattening left before the check's moves and the steps it
+moved nodes in.
 """
 
 
@@ -39,9 +42,12 @@ class OverlapMeter:
             'body_max_before_break_rel': self.body_max_before_break / t,
             'contacts_in_overlap_per_step': s['overlap_count'] / max(1, s['steps']),
             'projection_energy_in': -E['projection'],
+            'checked_max': s['max_checked'], 'checked_max_rel': s['max_checked'] / t, 'check_steps': s['checks'],
             'thickness': t,
         }
 
 
 UNITS = {'yarn_max': 'm', 'yarn_mean': 'm', 'body_max': 'm', 'body_mean': 'm', 'thickness': 'm',
+         'checked_max': 'm (largest overlap the flattening left and the check took out, before its moves)',
+         'check_steps': 'steps whose check moved nodes',
          'projection_energy_in': 'J (spring energy the position projection put in; < 0: took out)'}

@@ -30,7 +30,7 @@ HostStageParams changed() {
   h.response = "impulse", h.sweepOrder = "coloured";
   h.restitution = 0.3, h.friction = 0.4, h.bodyFriction = 0.5, h.tolerance = 2e-6, h.positionCorrection = 0.35;
   h.correctionSlop = 0.7e-6, h.projectionSlop = 0.8e-6, h.projectionMaxMove = 20e-6, h.maxIterations = 33;
-  h.projectionSweeps = 5;
+  h.projectionSweeps = 5, h.projectionCheck = 3e-6;
   return h;
 }
 
@@ -77,6 +77,7 @@ TEST(HostBridge, StageParamsReachTheCoreAndReadBack) {
   EXPECT_EQ(c.projectionMaxMove, 20e-6);
   EXPECT_EQ(c.maxIterations, 33);
   EXPECT_EQ(c.projectionSweeps, 5);
+  EXPECT_EQ(c.projectionCheck, 3e-6);
 
   HostStageParams back;
   hostStageParams(e, back);

@@ -97,6 +97,8 @@ def test_gap_model_keys_name_their_range_and_bad_combinations_are_refused():
                     ({'projection_sweeps': 51}, 'projection_sweeps'),
                     ({'projection_slop': -1e-6}, 'projection_slop'),
                     ({'projection_max_move': 0.0}, 'projection_max_move'),
+                    ({'projection_check': -0.5}, 'projection_check'),
+                    ({'projection_check': 2e-3}, 'projection_check'),
                     ({'sweep_order': 'red-black'}, 'sweep_order'),
                     # the projection belongs to the gap model's impulse response
                     ({'contact_model': 'paper', 'projection_sweeps': 2}, 'projection_sweeps'),
