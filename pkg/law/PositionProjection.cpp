@@ -45,6 +45,8 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     slots_[k] = {q, c.cpA, c.cpB, f.elem0[c.cpA], f.elem0[c.cpB]};
   });
   bool bodyMoved = !check;
+  // What a node may travel in all (this call and, after a check, the check before it).
+  const Real travelCap = (check ? kCheckTravel : kProjectionTravel) * maxMove;
   // The share of a move that moves no node more than maxMove, nor any node more than
   // kTravel x maxMove in all: moves beyond would carry a node into neighbours no contact was listed
   // for (the stage lists the pairs within that much more than the step's motion).
@@ -52,7 +54,7 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     Real scale = 1;
     for (int k = 0; k < n; ++k) {
       const Real step = std::abs(w[k] * f.invMass[node[k]] * dl);
-      if (step > 0) scale = std::min(scale, std::min(maxMove, std::max(Real(0), kProjectionTravel * maxMove - travel_[node[k]])) / step);
+      if (step > 0) scale = std::min(scale, std::min(maxMove, std::max(Real(0), travelCap - travel_[node[k]])) / step);
     }
     return scale * dl;
   };
