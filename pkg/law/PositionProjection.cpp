@@ -104,8 +104,9 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     movedNow_.assign(f.nNodes(), 0);
     rep.overlapLeft = 0;
     // The first sweep measures every contact (a check's, only its seeds): its colours on the
-    // threads. The later ones skip most contacts on their slot alone: on one thread, in the same order (the same bits; a
-    // barrier per colour would cost more than the work where the cores are busy).
+    // threads. The later ones skip most contacts on their slot alone: on one thread, in the same
+    // order (the same bits; a barrier per colour would cost more than the work where the cores are
+    // busy).
     for (int col = 0; col < colouring_.colours(); ++col) {
       const Index b = colouring_.begin(col);
       parallelFor(colouring_.begin(col + 1) - b, kContactGrain, first && !check ? nThreads : 1,

@@ -278,3 +278,29 @@ def test_energy_guard_refines_the_step_once_past_its_limit(yade_ns):
     assert off.check(0.9) == 1.0 and off.smallest_dt() == O.dt
     with pytest.raises(ValueError, match='guard_safety'):
         EnergyGuard(w.engine, 0.005, 0.0)
+
+
+def test_the_check_takes_out_what_the_flattening_left(tmp_path):
+    # A 3 mm cube at 1000 m/s through the 12.7 mm ply at 2 CPs per span: after the breaks the
+    # flattening leaves overlaps deeper than projection_check (2 um); the check takes them out
+    # before the rows and reports what it met, and with the check off (-1) they reach the rows and
+    # the reported overlap. The books close either way.
+    keys = ('shape=box', 'size=0.003', 'mass=0.000212', 'V=1000', 'cp_per_span=2', 'side=0.0127', 'stop=0')
+    for name in ('on', 'off'):
+        (tmp_path / name).mkdir()
+    on, off = (run_scene('ballistic.py', tmp_path / name, *keys, 'projection_check=%s' % pc)
+               for name, pc in (('on', '2e-6'), ('off', '-1')))
+    for rc, log, s in (on, off):
+        assert rc == 0, log[-3000:]
+        assert abs(s['measured']['energy_balance_error']) < 0.01
+    o_on, o_off = on[2]['measured']['overlap'], off[2]['measured']['overlap']
+    thickness = o_on['thickness']
+    assert o_on['check_steps'] > 0 and o_on['checked_max_rel'] > 2e-6 / thickness
+    assert o_on['yarn_max_rel'] <= 2.2e-6 / thickness < o_on['checked_max_rel']
+    assert o_off['check_steps'] == 0 and o_off['checked_max_rel'] == 0
+    assert o_off['yarn_max_rel'] > 2.2e-6 / thickness
+
+
+def test_bad_projection_check_names_the_key(tmp_path):
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', 'projection_check=0.01')
+    assert rc != 0 and 'projection_check = ' in log and 'allowed' in log
