@@ -18,6 +18,7 @@
 #include "collider/YarnTreeCollider.hpp"
 #include "dynamics/ChainDynamics.hpp"
 #include "geom/CPContact.hpp"
+#include "geom/GapFunction.hpp"
 #include "law/ImpulseLaw.hpp"
 #include "law/PositionProjection.hpp"
 #include "law/NormalForces.hpp"
@@ -214,6 +215,8 @@ class CollisionStage : public StepHook {
   std::vector<OBB> bounds_, grown_, skinBoxes_;  // skinBoxes_: grown_ + skin at the last broad phase
   bool pairsValid_ = false;
   std::vector<Real> grow_, flatBefore_, widest_;  // widest_: per node, the major semi-axis (model Gap)
+  ChordFrames chords_;                           // narrow (model Gap): each CP's unit chord and length
+  std::vector<Real> speed_;                      // narrow (model Gap): each CP's faster node's speed [m/s]
   std::vector<CPPair> pairs_;
   std::vector<CPContact> contacts_;
   std::vector<BodyCandidate> bodyPairs_;

@@ -101,13 +101,20 @@ Vec3 supportDirection(const Vec3& n, const Vec3& tA, const Vec3& tB, bool side) 
 // degrees or more, 0 at kSideEnterDeg or less (side by side: the supports), linear between.
 Real thicknessWeight(const Vec3& tA, const Vec3& tB) {
   static const Real lo = kSideEnterDeg * kPi / 180, hi = 45 * kPi / 180;
-  const Real angle = std::acos(std::min(Real(1), std::abs(tA.dot(tB))));
+  // Outside the ramp the weight is 0 or 1 without the arc cosine: 1e-9 in the cosine is more than
+  // 1e-9 rad in the angle there, where acos rounds within 1e-16 (the same result, bit for bit).
+  static const Real cLo = std::cos(lo) + 1e-9, cHi = std::cos(hi) - 1e-9;
+  const Real c = std::abs(tA.dot(tB));
+  if (c <= cHi) return 1;
+  if (c >= cLo) return 0;
+  const Real angle = std::acos(std::min(Real(1), c));
   return std::clamp((angle - lo) / (hi - lo), Real(0), Real(1));
 }
 
 // The section of CP e at s in the yarn's own plane (normal to yarnTangent), for the supports.
-SectionAt yarnSection(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3Array* tangent) {
-  SectionAt q = sectionAt(f, e, s, rule);
+SectionAt yarnSection(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3Array* tangent,
+                      const ChordFrames* chords) {
+  SectionAt q = sectionAt(f, e, s, rule, chords ? &chords->unit[e] : nullptr);
   const Vec3 t = yarnTangent(f, e, s, tangent, q.t);  // q.t: the chord's direction
   Vec3 d = q.d - q.d.dot(t) * t;
   q.t = t;
@@ -118,7 +125,7 @@ SectionAt yarnSection(const Fabric& f, Index e, Real s, SectionRule rule, const 
 
 // One CP-CP contact from the axis points A(s), B(t) with the sections' supports along the normal.
 void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kind, SectionRule rule, const Vec3* orient,
-              bool sections, const Vec3Array* tangent, CPContact& c) {
+              bool sections, const Vec3Array* tangent, CPContact& c, const ChordFrames* chords = nullptr) {
   const Index i = f.elem0[a], j = f.elem0[b];
   const Vec3 pA = (1 - s) * f.pos[i] + s * f.pos[i + 1], pB = (1 - t) * f.pos[j] + t * f.pos[j + 1];
   const Vec3 tA = f.pos[i + 1] - f.pos[i], tB = f.pos[j + 1] - f.pos[j];
@@ -127,7 +134,7 @@ void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kin
   Real r;
   orientNormal(pB - pA, orient, s > 0 && s < 1 && t > 0 && t < 1, tA, tB, centres, n, r);
   if (sections) {
-    const SectionAt qa = yarnSection(f, a, s, rule, tangent), qb = yarnSection(f, b, t, rule, tangent);
+    const SectionAt qa = yarnSection(f, a, s, rule, tangent, chords), qb = yarnSection(f, b, t, rule, tangent, chords);
     c.hDir = supportDirection(n, qa.t, qb.t, kind == ContactKind::Side);
     // Half-thicknesses where the pieces cross at more than 45 degrees, supports along hDir (widths
     // where the ribbons meet edge to edge) below 20, blended between: g must not jump where a pair
@@ -151,11 +158,11 @@ void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kin
 
 }  // namespace
 
-SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule) {
+SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3* chord) {
   const Index i = f.elem0[e], j = i + 1;
   SectionAt q;
   q.centre = (1 - s) * f.pos[i] + s * f.pos[j];
-  q.t = (f.pos[j] - f.pos[i]).normalized();
+  q.t = chord ? *chord : Vec3((f.pos[j] - f.pos[i]).normalized());
   const Vec3& dj = f.secDir[j];
   Vec3 d = (1 - s) * f.secDir[i] + s * (f.secDir[i].dot(dj) < 0 ? Vec3(-dj) : dj);
   d -= d.dot(q.t) * q.t;
@@ -167,15 +174,15 @@ SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule) {
   return q;
 }
 
-bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide) {
-  const Vec3 tA = (f.pos[f.elem0[a] + 1] - f.pos[f.elem0[a]]).normalized();
-  const Vec3 tB = (f.pos[f.elem0[b] + 1] - f.pos[f.elem0[b]]).normalized();
+bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide, const ChordFrames* chords) {
+  const Vec3 tA = chords ? chords->unit[a] : Vec3((f.pos[f.elem0[a] + 1] - f.pos[f.elem0[a]]).normalized());
+  const Vec3 tB = chords ? chords->unit[b] : Vec3((f.pos[f.elem0[b] + 1] - f.pos[f.elem0[b]]).normalized());
   static const Real cosEnter = std::cos(kSideEnterDeg * kPi / 180), cosLeave = std::cos(kSideLeaveDeg * kPi / 180);
   return std::abs(tA.dot(tB)) >= (wasSide ? cosLeave : cosEnter);
 }
 
 int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, const Vec3* orient, CPContact out[2],
-             const Vec3Array* tangent, const SegmentClosest* closest) {
+             const Vec3Array* tangent, const SegmentClosest* closest, const ChordFrames* chords) {
   const Index i = f.elem0[a], j = f.elem0[b];
   if (side) {
     // The part of A alongside B: B's ends projected on A's axis, clipped to A.
@@ -189,7 +196,7 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
       if (hi - lo <= 1e-3) {
         const Real s = 0.5 * (lo + hi);
         fillPair(f, a, b, s, alongCP(f, b, (1 - s) * f.pos[i] + s * f.pos[i + 1]), ContactKind::Side, rule, orient,
-                 true, tangent, out[0]);
+                 true, tangent, out[0], chords);
         out[0].anchor = SideAnchor::A;
         return 1;
       }
@@ -205,11 +212,11 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
         const Real s = ends[k];
         if (s > 0 && s < 1) {  // made by B's end: B(0) at s0, B(1) at s1
           fillPair(f, a, b, s, (k == 0) == (s0 <= s1) ? 0.0 : 1.0, ContactKind::Side, rule, orient ? orient + k : nullptr,
-                   true, tangent, out[k]);
+                   true, tangent, out[k], chords);
           out[k].anchor = SideAnchor::B;
         } else {
           fillPair(f, a, b, s, alongCP(f, b, f.pos[i + k]), ContactKind::Side, rule, orient ? orient + k : nullptr, true,
-                   tangent, out[k]);
+                   tangent, out[k], chords);
           out[k].anchor = SideAnchor::A;
         }
       }
@@ -226,7 +233,7 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
         const Real r0 = v0.norm(), r1 = v1.norm();
         if (sc.s > lo && sc.s < hi && sc.distance < std::min(r0, r1) - kSideSkew) {
           const int q = r0 <= r1 ? 1 : 0;
-          fillPair(f, a, b, sc.s, sc.t, ContactKind::Side, rule, orient ? orient + q : nullptr, true, tangent, out[q]);
+          fillPair(f, a, b, sc.s, sc.t, ContactKind::Side, rule, orient ? orient + q : nullptr, true, tangent, out[q], chords);
           out[q].anchor = SideAnchor::Closest;
         }
       }
@@ -237,7 +244,7 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
   // to end) keep the side-by-side measure at their closest points, so that the gap does not jump
   // from the half-thickness to the width when they slide alongside.
   const SegmentClosest sc = closest ? *closest : closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
-  fillPair(f, a, b, sc.s, sc.t, side ? ContactKind::Side : ContactKind::Cross, rule, orient, true, tangent, out[0]);
+  fillPair(f, a, b, sc.s, sc.t, side ? ContactKind::Side : ContactKind::Cross, rule, orient, true, tangent, out[0], chords);
   return 1;
 }
 

@@ -73,11 +73,20 @@ struct SectionAt {
   Vec3 centre, t, u, d;
   Real a, b;
 };
-SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule);
+/// `chord` (may be null: computed) is the unit chord of e at the current positions (ChordFrames).
+SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3* chord = nullptr);
+
+/// Each CP's unit chord, (x_{i+1} - x_i) / |x_{i+1} - x_i|, and its length, taken once per narrow
+/// phase for the pairs that share the CP (each CP is in about four pairs): the same expressions, so
+/// the same bits, as computing them pair by pair. Valid only while no node moves.
+struct ChordFrames {
+  Vec3Array unit;
+  std::vector<Real> length;
+};
 
 /// Side (true) or Cross for CPs a, b, with hysteresis: `wasSide` is the pair's kind at its last
-/// measurement.
-bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide);
+/// measurement. `chords` may be null (computed).
+bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide, const ChordFrames* chords = nullptr);
 
 /// The contacts of the pair a < b as the kind says (1 for Cross, 1 or 2 for Side), in out[]: normal,
 /// gap (sections measured now), sA/sB, point, kind, hA/hB. `orient` (may be null) points to the
@@ -85,9 +94,11 @@ bool sideBySide(const Fabric& f, Index a, Index b, bool wasSide);
 /// of the shared part, where skew axes can have opposite normals; one point reads orient[0]). `tangent` (may be null: computed) holds every node's yarn tangent
 /// (bound/CPBound's yarnTangentAt, as the stage's refit leaves them). `closest` (may be null:
 /// computed) holds the axes' closest points, closestSegmentSegment of the pair's four nodes, where
-/// the caller has them. Returns the count.
+/// the caller has them. `chords` (may be null: computed) holds the CPs' unit chords at the current
+/// positions. Returns the count.
 int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, const Vec3* orient, CPContact out[2],
-             const Vec3Array* tangent = nullptr, const SegmentClosest* closest = nullptr);
+             const Vec3Array* tangent = nullptr, const SegmentClosest* closest = nullptr,
+             const ChordFrames* chords = nullptr);
 
 /// The measure memory: the sections' measure hA + hB of a CP pair may grow between steps only into
 /// room that is there (up to the axes' distance r), never into an overlap: it is capped at

@@ -235,12 +235,26 @@ def test_bench_adaptive_quick(tmp_path):
     rc, log, s = run_scene('bench_adaptive.py', tmp_path, 'quick=1', 'cp_fine=2', 'fine_radius=3e-3')
     assert rc == 0, log
     m = s['measured']
-    assert m['side'] == 0.012
+    assert m['side'] == 0.012 and m['window'] == 'uniform'
+    assert m['uniform']['outcome'] == 'perforated'
     for run in ('uniform', 'adaptive'):
-        assert m[run]['outcome'] == 'perforated' and abs(m[run]['energy_balance_error']) < 0.01
+        assert abs(m[run]['energy_balance_error']) < 0.01
     assert m['adaptive']['cps'] < m['uniform']['cps'] and m['adaptive']['dt'] == m['uniform']['dt']
+    # window=uniform: the adaptive run simulates the uniform run's interval (to within its last step),
+    # and its velocity at that end is the one compared
+    assert abs(m['adaptive']['simulated_time'] - m['uniform']['simulated_time']) <= m['adaptive']['dt'] * 1.0001
+    q = json.load(open(tmp_path / 'adaptive' / 'summary.json'))['parameters']
+    assert q['stop'] in (0, False) and q['t_end'] == m['uniform']['simulated_time']
+    assert m['adaptive']['velocity'] == m['adaptive']['projectile_velocity_end']
+    assert m['residual_velocity_difference'] == pytest.approx(
+        abs(m['adaptive']['velocity'] - m['uniform']['residual_velocity']) / m['uniform']['residual_velocity'])
     assert m['speedup'] == pytest.approx(m['uniform']['wall_seconds'] / m['adaptive']['wall_seconds'])
     assert set(s['checks']) == {'speedup', 'residual_velocity', 'perforated'}
+
+
+def test_bench_adaptive_bad_window_names_the_key(tmp_path):
+    rc, log, s = run_scene('bench_adaptive.py', tmp_path, 'quick=1', 'window=both')
+    assert rc != 0 and 'window = ' in log and 'allowed' in log
 
 
 def test_bench_adaptive_passes_the_projectile_to_both_runs(tmp_path):
