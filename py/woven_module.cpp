@@ -214,7 +214,7 @@ bp::dict collisionStats(FabricEngine& e) {
   d["projection_overlap_left"] = s.projection.overlapLeft;
   d["force_rows"] = s.forces.rows, d["spring_energy"] = s.springEnergy, d["force_dissipated"] = s.forces.dissipated;
   d["seconds_refit"] = s.seconds[0], d["seconds_broad"] = s.seconds[1];
-  d["seconds_narrow"] = s.seconds[2], d["seconds_respond"] = s.seconds[3];
+  d["seconds_narrow"] = s.seconds[2], d["seconds_respond"] = s.seconds[3], d["seconds_project"] = s.seconds[4];
   d["tree_rebuilt_nodes"] = stageOf(e).tree.stats.rebuiltNodes;
   d["body_contacts"] = s.bodyContacts, d["body_penetration"] = s.bodyPenetration, d["deepest_body_cp"] = s.deepestBodyCP;
   d["max_body_penetration"] = s.maxBodyPenetration, d["body_lists"] = stageOf(e).bodyCollider.rebuilds;

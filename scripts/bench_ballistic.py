@@ -4,8 +4,8 @@
 #   yade -n -x scripts/bench_ballistic.py plies=8 V=400 shape=rcc t_end=2e-5     # the pack case (docs/ballistic.md)
 # 1. baseline: the same ply's springs and integration alone (collisions and breakage off), chain_steps steps;
 # 2. the coupled scene for t_end without stopping at perforation: wall time, CP-steps per second and
-#    the time by phase (refit, broad, narrow, response from the collision stage's clocks; springs,
-#    integration, breakage, the position projection and the YADE adapter as the rest).
+#    the time by phase (refit, broad, narrow, response and the position projection after the drift
+#    from the collision stage's clocks; springs, integration, breakage and the YADE adapter as the rest).
 # 3. threads = N >= 2 (run with yade -j N): the coupled scene once more on N threads in this process
 #    (woven.set_threads), its speed-up over step 2 and whether both runs end in the same bits
 #    (fabric positions and velocities, energy books, projectile); a difference fails the run.
@@ -92,7 +92,7 @@ def coupled(threads):
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     s = ply.engine.collision_stats()
     phases = {'refit': s['seconds_refit'], 'broad': s['seconds_broad'], 'narrow': s['seconds_narrow'],
-              'response': s['seconds_respond']}
+              'response': s['seconds_respond'], 'projection': s['seconds_project']}
     phases['springs_integration_breakage_adapter'] = wall - sum(phases.values())
     state = (ply.engine._positions(), ply.engine._velocities(), sorted(ply.engine.energy().items()),
              tuple(proj.state.vel), tuple(proj.state.pos))

@@ -725,10 +725,12 @@ Real CollisionStage::afterDrift(Fabric& f, Real dt, bool restitute, bool project
   if (!project) return dE;
   stats.projection = ProjectionReport{};
   if (const int sweeps = params_.projectionSweepCount(); sweeps > 0) {
+    auto t = Clock::now();
     projector_.project(f, contacts_, bodyContacts_, bodies, capacityOf(f), sweeps, params_.projectionSlop,
                        params_.projectionMaxMove, params_.rule, dt, stats.projection, params_.sweepOrder);
     projectionEnergy_ += stats.projection.energy;
     stats.projectionEnergy += stats.projection.energy;
+    stats.seconds[4] += since(t);
   }
   return dE;
 }

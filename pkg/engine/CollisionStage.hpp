@@ -71,7 +71,9 @@ struct CollisionStats {
   Real maxBodyPenetration = 0;  ///< [m]
   long maxUnresolved = 0;     ///< most unresolved impulse rows in one step
   Real maxResidual = 0;       ///< [m/s]
-  Real seconds[4] = {0, 0, 0, 0};  ///< wall time in refit, broad, narrow, respond [s] (bodies included)
+  /// wall time in refit, broad, narrow, respond (bodies included) and the position projection after
+  /// the drift [s]
+  Real seconds[5] = {0, 0, 0, 0, 0};
 };
 
 class CollisionStage : public StepHook {

@@ -149,7 +149,8 @@ def test_bench_ballistic_reports_phases(tmp_path):
     rc, log, s = run_scene('bench_ballistic.py', tmp_path, 'side=0.004', 't_end=1e-6', 'chain_steps=20')
     assert rc == 0, log
     m = s['measured']
-    assert set(m['phase_seconds']) == {'refit', 'broad', 'narrow', 'response', 'springs_integration_breakage_adapter'}
+    assert set(m['phase_seconds']) == {'refit', 'broad', 'narrow', 'response', 'projection',
+                                       'springs_integration_breakage_adapter'}
     # the collision stage's clocks fit inside the measured wall time: the rest is what they leave
     assert all(v >= 0 for v in m['phase_seconds'].values())
     assert m['cp_steps_per_second'] > 0 and m['coupled_over_chain'] > 0 and 'goal' in log
