@@ -18,7 +18,8 @@ class GridCollider {
  public:
   /// Sorted candidate pairs of CPs whose `boxes` overlap into `pairs`. With `dirty` (one flag per
   /// CP), only the pairs that involve a flagged CP are listed: the cells hold every CP, and only the
-  /// flagged ones look in theirs.
+  /// flagged ones look in theirs. Each box must hold its CP's axis as it is now (a bound, grown or
+  /// not): a point of both boxes between the two axes then answers the overlap before the test.
   void collide(const Fabric& f, const std::vector<OBB>& boxes, const PairFilter& filter, std::vector<CPPair>& pairs,
                const std::vector<std::uint8_t>* dirty = nullptr);
   long overlapTests = 0;  ///< OBB tests after the AABB test
