@@ -125,6 +125,7 @@ class ImpulseLaw {
   Real storeBodies(std::vector<RigidBody>* bodies);           // writes back, returns the bodies' work
   template <class RowAt>
   void colourRows(const Fabric& f, Index n, bool coloured, RowAt&& rowAt);  // rows_ by colour, start_ set
+  void serialLayout(Index n);  // no colours: rows_[0, n) all in the serial tail, start_ set
   Real solveRow(Fabric& f, Row& r, const ContactParams& p, bool friction);  // returns the row's miss
   static Real solveRow(Fabric& f, SweepRow& r);  // the same update, for a row without friction or body
   int solve(Fabric& f, const ContactParams& p, bool friction);  // coloured Gauss-Seidel sweeps, returns the count
