@@ -233,7 +233,8 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
         const Real r0 = v0.norm(), r1 = v1.norm();
         if (sc.s > lo && sc.s < hi && sc.distance < std::min(r0, r1) - kSideSkew) {
           const int q = r0 <= r1 ? 1 : 0;
-          fillPair(f, a, b, sc.s, sc.t, ContactKind::Side, rule, orient ? orient + q : nullptr, true, tangent, out[q], chords);
+          fillPair(f, a, b, sc.s, sc.t, ContactKind::Side, rule, orient ? orient + q : nullptr, true, tangent, out[q],
+                   chords);
           out[q].anchor = SideAnchor::Closest;
         }
       }
@@ -244,7 +245,8 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
   // to end) keep the side-by-side measure at their closest points, so that the gap does not jump
   // from the half-thickness to the width when they slide alongside.
   const SegmentClosest sc = closest ? *closest : closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
-  fillPair(f, a, b, sc.s, sc.t, side ? ContactKind::Side : ContactKind::Cross, rule, orient, true, tangent, out[0], chords);
+  fillPair(f, a, b, sc.s, sc.t, side ? ContactKind::Side : ContactKind::Cross, rule, orient, true, tangent, out[0],
+           chords);
   return 1;
 }
 
