@@ -13,16 +13,6 @@ inline std::uint64_t slotOf(std::int64_t x, std::int64_t y, std::int64_t z, std:
                           static_cast<std::uint64_t>(z) * 83492791ULL;
   return (h ^ (h >> 29)) & mask;
 }
-// Boxes that both hold the point half way between their CPs' axes overlap (each box holds its CP's
-// axis: the skin boxes hold the CPs as they are now, the containment the broad phase keeps). That
-// answers the separating-axis test for most touching CPs at a fraction of its cost, and the same way:
-// the test's allowance only widens it, so the pairs are the same.
-bool holdCommonPoint(const Fabric& f, const std::vector<OBB>& boxes, Index a, Index b) {
-  const Index i = f.elem0[a], j = f.elem0[b];
-  const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
-  const Vec3 mid = 0.5 * ((1 - sc.s) * f.pos[i] + sc.s * f.pos[i + 1] + (1 - sc.t) * f.pos[j] + sc.t * f.pos[j + 1]);
-  return boxes[a].outside(mid) <= 0 && boxes[b].outside(mid) <= 0;
-}
 }  // namespace
 
 void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const PairFilter& filter,
@@ -106,7 +96,11 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
           const Index lo = std::min(i, j), hi = std::max(i, j);  // the full phase's argument order
           if (filter.excluded(f, lo, hi)) continue;
           ++chunkTests_[t];
-          if (holdCommonPoint(f, boxes, lo, hi) || obbOverlap(boxes[lo], boxes[hi])) mine.push_back(j);
+          // A point between the two axes answers most overlapping pairs (the boxes hold their CPs)
+          const Index a = f.elem0[lo], b = f.elem0[hi];
+          const Vec3 mid = closestMidpoint(f.pos[a], f.pos[a + 1], f.pos[b], f.pos[b + 1],
+                                           closestSegmentSegment(f.pos[a], f.pos[a + 1], f.pos[b], f.pos[b + 1]));
+          if (obbOverlap(boxes[lo], boxes[hi], mid)) mine.push_back(j);
         }
       }
       std::sort(mine.begin(), mine.end());

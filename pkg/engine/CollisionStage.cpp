@@ -100,9 +100,11 @@ void CollisionStage::refit(Fabric& f, Real dt) {
   // be moved by the position projection after it.
   grow_.resize(bounds_.size());
   const Real projected = projectionReach(dt);
+  speed_.resize(bounds_.size());
   parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
     const Index i = f.elem0[e];
-    grow_[e] = dt * std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm())) + projected;
+    speed_[e] = std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm()));
+    grow_[e] = dt * speed_[e] + projected;
   });
   growBoxes(bounds_, grow_, grown_);
 }
@@ -223,20 +225,19 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
     remapCache(caching, gapModel);
   pairsChanged_ = false;
   if (gapModel) {
-    // Each node's major semi-axis [m]; each CP's unit chord, its length and its faster node's speed,
-    // once for the four or so pairs that share it (the same expressions as pair by pair: same bits).
+    // Each node's major semi-axis [m]; each CP's unit chord and its length, once for the four or so
+    // pairs that share it (the same expressions as pair by pair: same bits). The speeds are refit's
+    // (every narrow phase follows a refit, with the same velocities).
     widest_.resize(f.secRadius.size());
     parallelFor(f.nNodes(), kParallelGrain, threads(),
                 [&](Index k) { widest_[k] = semiAxes(f.secRadius[k], f.secFlat[k], params_.rule).a; });
     chords_.unit.resize(f.nElems());
     chords_.length.resize(f.nElems());
-    speed_.resize(f.nElems());
     parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
       const Index i = f.elem0[e];
       const Vec3 d = f.pos[i + 1] - f.pos[i];
       chords_.unit[e] = d.normalized();
       chords_.length[e] = d.norm();
-      speed_[e] = std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm()));
     });
   }
   // Pairs the position projection may move together (each node at most kProjectionTravel x
@@ -276,15 +277,11 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         // the default impact.
         const Real widest = std::max(std::max(widest_[i], widest_[i + 1]), std::max(widest_[j], widest_[j + 1]));
         const SegmentClosest axes = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
-        // Boxes that both hold the point half way between the axes overlap: that answers the
-        // separating-axis test for most touching pairs (a crossing's midpoint lies inside both
-        // sections) with two point-in-box tests instead of up to 15 axes, and the same way (the test's
-        // allowance only widens it).
-        const Vec3 mid = 0.5 * ((1 - axes.s) * f.pos[i] + axes.s * f.pos[i + 1] + (1 - axes.t) * f.pos[j] +
-                                axes.t * f.pos[j + 1]);
+        // The boxes' test probed first at the point between the axes (a crossing's midpoint lies
+        // inside both sections).
         if (axes.distance > 2 * widest + reach ||
-            !((grown_[pr.a].outside(mid) <= 0 && grown_[pr.b].outside(mid) <= 0) ||
-              obbOverlap(grown_[pr.a], grown_[pr.b]))) {
+            !obbOverlap(grown_[pr.a], grown_[pr.b],
+                        closestMidpoint(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1], axes))) {
           if (pc.memo) pc = PairMemo();  // as a pair the broad phase no longer lists: the contacts do not depend on its skin
           continue;
         }

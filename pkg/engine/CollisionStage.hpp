@@ -218,7 +218,7 @@ class CollisionStage : public StepHook {
   bool pairsValid_ = false;
   std::vector<Real> grow_, flatBefore_, widest_;  // widest_: per node, the major semi-axis (model Gap)
   ChordFrames chords_;                           // narrow (model Gap): each CP's unit chord and length
-  std::vector<Real> speed_;                      // narrow (model Gap): each CP's faster node's speed [m/s]
+  std::vector<Real> speed_;                      // refit: each CP's faster node's speed [m/s] (boxes, narrow)
   std::vector<CPPair> pairs_;
   std::vector<CPContact> contacts_;
   std::vector<BodyCandidate> bodyPairs_;

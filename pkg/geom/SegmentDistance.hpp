@@ -38,4 +38,9 @@ inline SegmentClosest closestSegmentSegment(const Vec3& p0, const Vec3& p1, cons
   return out;
 }
 
+/// The point half way between the closest points `c` of segments P and Q.
+inline Vec3 closestMidpoint(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, const SegmentClosest& c) {
+  return 0.5 * ((1 - c.s) * p0 + c.s * p1 + (1 - c.t) * q0 + c.t * q1);
+}
+
 }  // namespace woven

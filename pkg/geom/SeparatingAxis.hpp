@@ -45,6 +45,12 @@ constexpr Real kParallel = 1e-150;
 
 /// Yes/no overlap with early out on the first separating axis.
 bool obbOverlap(const OBB& a, const OBB& b);
+/// The same answer, first asking whether `probe` lies inside both boxes: then they overlap (the
+/// test's allowance only widens it), with two point-in-box tests instead of the frame and up to 15
+/// axes. A point between two touching CPs' axes (closestMidpoint) settles most touching pairs.
+inline bool obbOverlap(const OBB& a, const OBB& b, const Vec3& probe) {
+  return (a.outside(probe) <= 0 && b.outside(probe) <= 0) || obbOverlap(a, b);
+}
 /// Overlap test with the TD vector and the contact points (face-face polygon clipping, edge-edge
 /// closest points; a vertex-face contact is the one-point case of the clipping; where the edge-edge
 /// points are ill-defined, at face/edge ties and near-parallel edges, clipping along the normal).
