@@ -202,11 +202,19 @@ void CollisionStage::remapCache(bool caching, bool gapModel) {
     old.swap(now);
     now.resize(used ? pairs_.size() : 0);  // each entry written once below
     if (!used) return;
-    std::size_t o = 0;
-    for (std::size_t k = 0; k < pairs_.size(); ++k) {
-      while (o < cachePairs_.size() && cachePairs_[o] < pairs_[k]) ++o;
-      now[k] = o < cachePairs_.size() && cachePairs_[o] == pairs_[k] && o < old.size() ? old[o] : Entry();
-    }
+    // Fixed chunks of the new pairs, each starting its walk where the old list reaches its first
+    // pair (the serial walk's place there): the same entries for any thread count.
+    constexpr Index kChunk = 4096;
+    const Index n = static_cast<Index>(pairs_.size());
+    parallelFor(chunkCount(n, kChunk), 2, threads(), [&](Index t) {
+      const Index k0 = t * kChunk, k1 = std::min(n, k0 + kChunk);
+      std::size_t o = static_cast<std::size_t>(
+          std::lower_bound(cachePairs_.begin(), cachePairs_.end(), pairs_[k0]) - cachePairs_.begin());
+      for (Index k = k0; k < k1; ++k) {
+        while (o < cachePairs_.size() && cachePairs_[o] < pairs_[k]) ++o;
+        now[k] = o < cachePairs_.size() && cachePairs_[o] == pairs_[k] && o < old.size() ? old[o] : Entry();
+      }
+    });
   };
   follow(cache_, cacheOld_, caching);
   follow(memo_, memoOld_, gapModel);
@@ -342,12 +350,18 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         out.push_back(c);
     }
   });
-  contacts_.clear();
+  // Joined in chunk order, each chunk copied to its place on the threads (a serial copy of some 4 MB
+  // a step held the second thread idle).
+  sliceStart_.resize(chunks + 1);
+  sliceStart_[0] = 0;
   stats.cached = 0;
   for (Index t = 0; t < chunks; ++t) {
-    contacts_.insert(contacts_.end(), slices_[t].begin(), slices_[t].end());
+    sliceStart_[t + 1] = sliceStart_[t] + slices_[t].size();
     stats.cached += reused_[t];
   }
+  contacts_.resize(sliceStart_[chunks]);
+  parallelFor(chunks, 2, threads(),
+              [&](Index t) { std::copy(slices_[t].begin(), slices_[t].end(), contacts_.begin() + sliceStart_[t]); });
 }
 
 void CollisionStage::narrowBodies(const Fabric& f, Real dt) {
