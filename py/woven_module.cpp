@@ -581,8 +581,8 @@ BOOST_PYTHON_MODULE(_woven) {
            "penalty_damping zeta in [0, 1), flattening 'geometric', 'none' or 'springs', section_stiffness k_s [N/m] > 0 "
            "(docs/collisions.md), contact_model 'gap' (gap functions, exact gradient rows, position projection) or "
            "'paper' (Sections 4-5), projection_sweeps in [0, 50] or -1 (auto: 8 with 'gap' and 'impulse', else 0), "
-           "projection_slop [m] in [0, 1e-3], projection_max_move [m] in (0, 1e-3], sweep_order 'sequential' (contact order; the default) "
-           "or 'coloured' (rows of a colour on the threads), projection_check [m] in [0, 1e-3] or -1 (contacts still deeper "
+           "projection_slop [m] in [0, 1e-3], projection_max_move [m] in (0, 1e-3], sweep_order 'sequential' (contact order; the default), "
+           "'coloured' (rows of a colour on the threads) or 'blocked' (slabs of the ply on the threads), projection_check [m] in [0, 1e-3] or -1 (contacts still deeper "
            "after the flattening are projected out before the rows; -1: no check). See woven.contact.")
       .def("disable_collisions", +[](FabricEngine& e) { e.disableCollisions(); })
       .add_property("collisions_enabled", +[](FabricEngine& e) { return e.collisions() != nullptr; })

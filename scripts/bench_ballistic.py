@@ -1,6 +1,6 @@
 # Benchmark of the default ballistic scene (scripts/ballistic.py's defaults: KM2 706 single ply 50.8 mm,
 # clamped on 4 edges, cube 1.1 g at 200 m/s), all in one process on one core:
-#   yade -n -x scripts/bench_ballistic.py [t_end=1e-4] [chain_steps=300] [threads=1] [out=DIR]
+#   yade -n -x scripts/bench_ballistic.py [t_end=1e-4] [chain_steps=300] [threads=1] [sweep_order=] [out=DIR]
 #   yade -n -x scripts/bench_ballistic.py plies=8 V=400 shape=rcc t_end=2e-5     # the pack case (docs/ballistic.md)
 # 1. baseline: the same ply's springs and integration alone (collisions and breakage off), chain_steps steps;
 # 2. the coupled scene for t_end without stopping at perforation: wall time, CP-steps per second and
@@ -8,7 +8,9 @@
 #    from the collision stage's clocks; springs, integration, breakage and the YADE adapter as the rest).
 # 3. threads = N >= 2 (run with yade -j N): the coupled scene once more on N threads in this process
 #    (woven.set_threads), its speed-up over step 2 and whether both runs end in the same bits
-#    (fabric positions and velocities, energy books, projectile); a difference fails the run.
+#    (fabric positions and velocities, energy books, projectile); a difference fails the run. Both
+#    coupled runs then sweep the rows in `sweep_order` (default 'blocked': slabs of the ply at once on
+#    the threads; 'coloured': colour by colour), not the scene's serial 'sequential'.
 # Prints the figures, the ratio to the baseline and to issue 12's goals (100 us in 3 s; a coupled
 # CP-step rate of at least 1/30 of the springs-alone rate), and writes
 # out/bench_ballistic/summary.json.
@@ -34,6 +36,8 @@ p = read_params({'t_end': (1e-4, 's', 'simulated time of the coupled run'),
                  'V': (200.0, 'm/s', 'impact speed, (0, 5000]'),
                  'shape': ('box', '', "the scene's projectile: 'box' (1.1 g cube), 'sphere', 'rcc' or 'fsp' (woven.projectiles)"),
                  'threads': (1, '', 'threads of a second coupled run compared with one thread, in [1, 64] (1: one run only)'),
+                 'sweep_order': ('', '', "row order of both coupled runs: 'sequential', 'coloured' or 'blocked' (default: the "
+                                 "scene's 'sequential' with threads = 1, 'blocked' with threads >= 2)"),
                  'out': ('', '', 'output folder (default out/bench_ballistic)')})
 if not (isinstance(p.threads, int) and 1 <= p.threads <= 64):
     raise ValueError('threads = %r is invalid: allowed an integer in [1, 64]' % (p.threads,))
@@ -41,6 +45,8 @@ if not 1 <= p.plies <= woven.pack.MAX_PLIES:
     raise ValueError('plies = %r is invalid: allowed [1, %d]' % (p.plies, woven.pack.MAX_PLIES))
 if not (0 < p.V <= 5000):
     raise ValueError('V = %r is invalid: allowed (0, 5000] m/s' % p.V)
+if p.sweep_order not in ('', 'sequential', 'coloured', 'blocked'):
+    raise ValueError("sweep_order = %r is invalid: allowed 'sequential', 'coloured' or 'blocked'" % (p.sweep_order,))
 if p.shape not in woven.ballistic.SHAPES:
     raise ValueError('shape = %r is invalid: allowed %s' % (p.shape, ', '.join(woven.ballistic.SHAPES)))
 ply_angles = woven.pack.parse_angles(p.ply_angles, p.plies)
@@ -53,8 +59,10 @@ weave_args = {'preset': 'km2_706', 'nx': 0, 'ny': 0, 'cp_per_span': p.cp_per_spa
 # The scene's contact settings (scripts/ballistic.py)
 contact_args = {k: v[0] for k, v in CONTACT_KEYS.items()}
 contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=10, skin=4e-5, broad_phase=p.broad_phase)
-if p.threads > 1:  # both coupled runs in the order whose sweeps use the threads (docs/design.md, Threads)
-    contact_args['sweep_order'] = 'coloured'
+if p.sweep_order:
+    contact_args['sweep_order'] = p.sweep_order
+elif p.threads > 1:  # both coupled runs in an order whose sweeps use the threads (docs/design.md, Threads)
+    contact_args['sweep_order'] = 'blocked'
 if p.plies > 1:  # the scene's sweeps for a pack (scripts/ballistic.py)
     contact_args['max_iterations'] = woven.pack.sweeps_for(p.plies)
 
@@ -111,7 +119,8 @@ measured = {'cps': ply.engine.n_elements, 'steps': steps, 'dt': O.dt, 'simulated
             'phase_fraction': {k: v / wall for k, v in phases.items()},
             'wall_seconds_per_100us': per_100us, 'goal_ratio': per_100us / p.goal_seconds,
             'chain_only_cp_steps_per_second': chain_rate, 'coupled_over_chain': rate / chain_rate,
-            'projectile_velocity_end': -proj.state.vel[2], 'broken_elements': ply.engine.broken_elements}
+            'projectile_velocity_end': -proj.state.vel[2], 'broken_elements': ply.engine.broken_elements,
+            'sweep_order': contact_args['sweep_order']}
 checks, status = {}, 'ok'
 if p.threads > 1:
     _, _, wall_n, phases_n, state_n, _ = coupled(p.threads)

@@ -79,7 +79,7 @@ void toHost(const ContactParams& p, BroadPhase broad, HostStageParams& h) {
   h.model = p.model == ContactModel::Gap ? "gap" : "paper", h.cacheDistance = p.cacheDistance;
   h.penaltyStiffness = p.penaltyStiffness, h.penaltyDamping = p.penaltyDamping, h.sectionStiffness = p.sectionStiffness;
   h.response = p.response == Response::Impulse ? "impulse" : "penalty";
-  h.sweepOrder = p.sweepOrder == SweepOrder::Coloured ? "coloured" : "sequential";
+  h.sweepOrder = p.sweepOrder == SweepOrder::Coloured ? "coloured" : p.sweepOrder == SweepOrder::Blocked ? "blocked" : "sequential";
   h.restitution = p.restitution, h.friction = p.friction, h.bodyFriction = p.bodyFriction, h.tolerance = p.tolerance;
   h.positionCorrection = p.positionCorrection, h.correctionSlop = p.correctionSlop;
   h.projectionSlop = p.projectionSlop, h.projectionMaxMove = p.projectionMaxMove, h.projectionCheck = p.projectionCheck;

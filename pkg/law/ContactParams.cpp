@@ -14,8 +14,10 @@ ContactModel contactModelByName(const std::string& name) {
 SweepOrder sweepOrderByName(const std::string& name) {
   if (name == "coloured") return SweepOrder::Coloured;
   if (name == "sequential") return SweepOrder::Sequential;
+  if (name == "blocked") return SweepOrder::Blocked;
   throw ParameterError("sweep_order", "'" + name + "'",
-                       "'coloured' (colour by colour on the threads) or 'sequential' (contact order, serial)");
+                       "'coloured' (colour by colour on the threads), 'sequential' (contact order, serial) or "
+                       "'blocked' (slabs of the ply at once on the threads, then the rows across them)");
 }
 
 Response responseByName(const std::string& name) {
@@ -49,7 +51,7 @@ void ContactParams::validate() const {
   require(std::isfinite(correctionSlop) && correctionSlop >= 0, "correction_slop", correctionSlop, "[0, inf) m");
   require(std::isfinite(cacheDistance) && cacheDistance >= 0, "contact_cache", cacheDistance, "[0, inf) m (0: off)");
   require(threads >= 0 && threads <= 64, "threads", threads, "[0, 64] (0: OpenMP's count)");
-  require(static_cast<int>(sweepOrder) <= 1, "sweep_order", static_cast<int>(sweepOrder), "'coloured' or 'sequential'");
+  require(static_cast<int>(sweepOrder) <= 2, "sweep_order", static_cast<int>(sweepOrder), "'coloured', 'sequential' or 'blocked'");
   require(std::isfinite(penaltyStiffness) && penaltyStiffness > 0, "penalty_stiffness", penaltyStiffness, "(0, inf) N/m");
   require(std::isfinite(penaltyDamping) && penaltyDamping >= 0 && penaltyDamping < 1, "penalty_damping", penaltyDamping,
           "[0, 1) (damping ratio)");

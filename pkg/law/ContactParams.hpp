@@ -27,16 +27,21 @@ enum class ContactModel : std::uint8_t {
   /// on the sections along it, moving SAT for first contacts, pre-drift positional correction.
   Paper = 1
 };
-/// Row order of the Gauss-Seidel sweeps (impulse rows and position projection; law/RowColouring).
+/// Row order of the Gauss-Seidel sweeps (impulse rows and position projection; law/RowColouring,
+/// law/RowBlocks).
 enum class SweepOrder : std::uint8_t {
   /// Colour by colour (rows of a colour share no node, solved at once on the threads), the rows on
   /// a rigid body last: the order that lets the sweeps use the threads.
   Coloured = 0,
   /// One row after another in contact order, the body rows last: serial, the default (no two-thread
   /// gain of the coloured order measured yet, and 5-15 % slower on one thread; docs/design.md).
-  Sequential = 1
+  Sequential = 1,
+  /// Block by block (law/RowBlocks: slabs of the ply whose rows share no node, solved at once, each
+  /// in contact order), then the rows across the slabs' cuts and the body rows, in order: a barrier
+  /// per sweep instead of one per colour.
+  Blocked = 2
 };
-/// "coloured" or "sequential"; throws ParameterError("sweep_order") otherwise.
+/// "coloured", "sequential" or "blocked"; throws ParameterError("sweep_order") otherwise.
 SweepOrder sweepOrderByName(const std::string& name);
 /// "gap" or "paper"; throws ParameterError("contact_model") otherwise.
 ContactModel contactModelByName(const std::string& name);

@@ -136,8 +136,8 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   // Sequential order: that list itself, made of the slots in place (the contacts with a row moved
   // forward, most often none) and swapped in, not copied row by row (a row is 192 bytes: the copy
   // was 3 % of the default impact). The same rows in the same order.
-  if (p.sweepOrder == SweepOrder::Coloured) {
-    colourRows(f, static_cast<Index>(rep.rows), true,
+  if (p.sweepOrder != SweepOrder::Sequential) {
+    colourRows(f, static_cast<Index>(rep.rows), p.sweepOrder,
                [&](Index r) -> const Row& { return r < nYarn ? slots_[yarnRows_[r]] : bodyRows_[r - nYarn]; });
   } else {
     for (Index r = 0; r < nYarn; ++r)
@@ -210,30 +210,42 @@ Real ImpulseLaw::energyChange(const Fabric& f) const {
 void ImpulseLaw::serialLayout(Index n) {
   std::fill(start_, start_ + RowColouring::kColours + 1, Index(0));
   start_[RowColouring::kColours + 1] = n;
-  colours_ = 0;
+  colours_ = blocks_ = 0;
 }
 
-// The rows by colour (law/RowColouring: rows of one colour share no node), the body rows last, laid
-// out in that order in rows_ (rowAt(r): row r of the list, which rows_ must not hold): the sweeps
-// then solve each colour's rows at once on the threads, and the body rows one by one. Not
-// coloured (SweepOrder::Sequential): every row in the serial tail, in list order.
+// The rows by colour (law/RowColouring: rows of one colour share no node) or by block
+// (law/RowBlocks: rows of two blocks share no node), the body rows last, laid out in that order in
+// rows_ (rowAt(r): row r of the list, which rows_ must not hold): the sweeps then solve each
+// colour's rows at once on the threads (or the blocks at once, each in order), then the tail (the
+// seam and the body rows) one by one. SweepOrder::Sequential: every row in the serial tail, in list
+// order.
 template <class RowAt>
-void ImpulseLaw::colourRows(const Fabric& f, Index n, bool coloured, RowAt&& rowAt) {
+void ImpulseLaw::colourRows(const Fabric& f, Index n, SweepOrder order, RowAt&& rowAt) {
   rows_.resize(static_cast<std::size_t>(n));
-  if (!coloured) {  // the serial tail alone, in list order: nothing to colour
+  if (order == SweepOrder::Sequential) {  // the serial tail alone, in list order: nothing to colour
     parallelFor(n, kParallelGrain, threads(), [&](Index k) { rows_[k] = rowAt(k); });
     serialLayout(n);
     return;
   }
-  colouring_.build(n, f.nNodes(), [&](Index r, Index* node) {
+  const auto nodesOf = [&](Index r, Index* node) {
     const Row& q = rowAt(r);
     if (q.body >= 0) return -1;  // all of a body's rows share it
     for (int k = 0; k < 4; ++k) node[k] = q.node[k];
     return 4;
-  });
+  };
+  if (order == SweepOrder::Blocked) {
+    blocking_.build(n, f.pos, nodesOf);
+    parallelFor(n, kParallelGrain, threads(), [&](Index k) { rows_[k] = rowAt(blocking_.order()[k]); });
+    std::fill(start_, start_ + RowColouring::kColours + 2, n);
+    for (int b = 0; b <= RowBlocks::kBlocks; ++b) start_[b] = blocking_.begin(b);
+    start_[RowColouring::kColours] = blocking_.begin(RowBlocks::kSeam);  // the seam, then the body rows
+    colours_ = 0, blocks_ = RowBlocks::kBlocks;
+    return;
+  }
+  colouring_.build(n, f.nNodes(), nodesOf);
   parallelFor(n, kParallelGrain, threads(), [&](Index k) { rows_[k] = rowAt(colouring_.order()[k]); });
   for (int c = 0; c <= RowColouring::kColours + 1; ++c) start_[c] = colouring_.begin(c);
-  colours_ = colouring_.colours();
+  colours_ = colouring_.colours(), blocks_ = 0;
 }
 
 // One Gauss-Seidel update of row r (projected on J >= 0 and the friction cone); returns how far the
@@ -277,7 +289,9 @@ Real ImpulseLaw::solveRow(Fabric& f, SweepRow& r) {
 
 // Coloured sweeps: the colours in order, each colour's rows on the threads (they share no node:
 // each writes only its own nodes, so any split gives the same bits), then the serial tail (the
-// rows on a body) in order. A colour's misses are kept per row; their largest is order-free.
+// rows on a body) in order. Blocked sweeps: the blocks at once, each block's rows in order (blocks
+// share no node), then the tail (the seam, then the rows on a body) in order. The misses are kept
+// per row; their largest is order-free.
 // Whether the colours are split over the threads changes no result, only the time: a sweep costs
 // a barrier per colour, and on cores busy with other processes each barrier waits for a thread
 // that is not running (measured, bench_threads at a load of 3-13 on 2 cores: the response phase
@@ -306,6 +320,11 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
   for (int it = 0; it < p.maxIterations; ++it) {
     const bool split = nThreads > 1 && (it == 0 || (it > 1 && seconds[0] <= seconds[1]));
     const auto t0 = Clock::now();
+    // Blocks: each on a thread, its rows in order (a barrier per sweep).
+    parallelFor(blocks_, 1, split ? nThreads : 1, [&](Index b) {
+      for (Index k = start_[b]; k < start_[b + 1]; ++k)
+        miss_[k] = packed ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
+    });
     for (int c = 0; c < colours; ++c) {
       const Index b = start_[c];
       if (packed)
@@ -348,7 +367,7 @@ Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p, std::vector<RigidB
   }
   rows_.resize(kept);
   sorted_.swap(rows_);
-  colourRows(f, static_cast<Index>(kept), p.sweepOrder == SweepOrder::Coloured, [&](Index r) -> const Row& { return sorted_[r]; });
+  colourRows(f, static_cast<Index>(kept), p.sweepOrder, [&](Index r) -> const Row& { return sorted_[r]; });
   keepVelocities(f);
   solve(f, p, false);
   const Real work = storeBodies(bodies);

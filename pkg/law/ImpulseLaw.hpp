@@ -40,6 +40,7 @@
 #include "geom/BodyContact.hpp"
 #include "geom/CPContact.hpp"
 #include "law/ContactParams.hpp"
+#include "law/RowBlocks.hpp"
 #include "law/RowColouring.hpp"
 #include <functional>
 #include <vector>
@@ -124,11 +125,11 @@ class ImpulseLaw {
   void loadBodies(const std::vector<RigidBody>* bodies);
   Real storeBodies(std::vector<RigidBody>* bodies);           // writes back, returns the bodies' work
   template <class RowAt>
-  void colourRows(const Fabric& f, Index n, bool coloured, RowAt&& rowAt);  // rows_ by colour, start_ set
+  void colourRows(const Fabric& f, Index n, SweepOrder order, RowAt&& rowAt);  // rows_ by colour or block, start_ set
   void serialLayout(Index n);  // no colours: rows_[0, n) all in the serial tail, start_ set
   Real solveRow(Fabric& f, Row& r, const ContactParams& p, bool friction);  // returns the row's miss
   static Real solveRow(Fabric& f, SweepRow& r);  // the same update, for a row without friction or body
-  int solve(Fabric& f, const ContactParams& p, bool friction);  // coloured Gauss-Seidel sweeps, returns the count
+  int solve(Fabric& f, const ContactParams& p, bool friction);  // Gauss-Seidel sweeps in rows_'s layout, returns the count
   void keepVelocities(const Fabric& f);      // of the touched nodes, before the impulses
   Real energyChange(const Fabric& f) const;  // kinetic energy of the integer step the impulses add [J]
   std::vector<Row> rows_, sorted_;
@@ -138,8 +139,11 @@ class ImpulseLaw {
   std::vector<Index> yarnRows_;  // the contacts with a row, in order
   std::vector<Row> bodyRows_;
   RowColouring colouring_;
-  Index start_[RowColouring::kColours + 2] = {};  // rows_[start_[c], start_[c + 1]): colour c, the tail last
+  RowBlocks blocking_;
+  // rows_[start_[c], start_[c + 1]): colour c (or block c), the serial tail from start_[kColours]
+  Index start_[RowColouring::kColours + 2] = {};
   int colours_ = 0;                               // colours in use (0: every row in the tail)
+  int blocks_ = 0;                                // blocks in use (SweepOrder::Blocked; then no colours)
   std::vector<Real> miss_;                        // per row: its miss in the last sweep [m/s]
   std::vector<BodyVelocity> bodyVel_;
   Vec3Array vBefore_;

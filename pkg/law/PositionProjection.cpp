@@ -30,17 +30,23 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
   // The contacts by colour: those of a colour share no node (law/RowColouring), and a contact reads
   // and moves only its own four nodes, so a colour's contacts are projected at once on the threads
   // with the same bits as one after another. The body contacts (all share the body) follow, in order.
-  // SweepOrder::Sequential: every contact in the serial tail, in order.
-  colouring_.build(nc, f.nNodes(), [&](Index q, Index* node) {
+  // SweepOrder::Sequential: every contact in the serial tail, in order. SweepOrder::Blocked: the
+  // blocks of law/RowBlocks at once (they share no node), each in order, then the seam in order.
+  const bool blocked = order == SweepOrder::Blocked;
+  const auto nodesOf = [&](Index q, Index* node) {
     if (order == SweepOrder::Sequential) return -1;
     node[0] = f.elem0[contacts[q].cpA], node[1] = node[0] + 1, node[2] = f.elem0[contacts[q].cpB], node[3] = node[2] + 1;
     return 4;
-  });
+  };
+  if (blocked) blocking_.build(nc, f.pos, nodesOf);
+  else colouring_.build(nc, f.nNodes(), nodesOf);
+  const std::vector<Index>& layout = blocked ? blocking_.order() : colouring_.order();
+  const Index tail = blocked ? blocking_.begin(RowBlocks::kSeam) : colouring_.begin(RowColouring::kColours);
   // What a sweep reads first, in colour order: most contacts are skipped on it alone, without
   // reading the contact (in colour order the contacts are scattered in memory).
   slots_.resize(contacts.size());
   parallelFor(nc, kParallelGrain, threads(), [&](Index k) {
-    const Index q = colouring_.order()[k];
+    const Index q = layout[k];
     const CPContact& c = contacts[q];
     slots_[k] = {q, c.cpA, c.cpB, f.elem0[c.cpA], f.elem0[c.cpB]};
   });
@@ -106,14 +112,19 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     // The first sweep measures every contact (a check's, only its seeds): its colours on the
     // threads. The later ones skip most contacts on their slot alone: on one thread, in the same
     // order (the same bits; a barrier per colour would cost more than the work where the cores are
-    // busy).
-    for (int col = 0; col < colouring_.colours(); ++col) {
-      const Index b = colouring_.begin(col);
-      parallelFor(colouring_.begin(col + 1) - b, kContactGrain, first && !check ? nThreads : 1,
-                  [&](Index k) { outcome_[b + k] = projectOne(slots_[b + k], first); });
-    }
-    // The colouring's tail (a contact that found no colour free) in order.
-    for (Index k = colouring_.begin(RowColouring::kColours); k < nc; ++k) outcome_[k] = projectOne(slots_[k], first);
+    // busy). The blocks cost one barrier a sweep: every sweep but a check's on the threads.
+    if (blocked)
+      parallelFor(RowBlocks::kBlocks, 1, check ? 1 : nThreads, [&](Index b) {
+        for (Index k = blocking_.begin(b); k < blocking_.begin(b + 1); ++k) outcome_[k] = projectOne(slots_[k], first);
+      });
+    else
+      for (int col = 0; col < colouring_.colours(); ++col) {
+        const Index b = colouring_.begin(col);
+        parallelFor(colouring_.begin(col + 1) - b, kContactGrain, first && !check ? nThreads : 1,
+                    [&](Index k) { outcome_[b + k] = projectOne(slots_[b + k], first); });
+      }
+    // The tail (a contact that found no colour free, or the blocks' seam) in order.
+    for (Index k = tail; k < nc; ++k) outcome_[k] = projectOne(slots_[k], first);
     for (Real left : outcome_)
       if (left > 0) ++rep.pushed, moved = true, rep.overlapLeft = std::max(rep.overlapLeft, left);
     for (BodyContact& c : bodyContacts) {

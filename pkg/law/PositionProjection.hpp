@@ -11,8 +11,9 @@
 // not changed. The energy the moves put in is returned for the books (EnergyBooks::projection):
 // the spring energy of the CPs whose nodes moved, and the change of the step's kinetic energy that
 // their changed forces make (dF . dx / 2 over the drift dx = dt v). The contacts are swept colour by
-// colour (law/RowColouring: a colour's contacts share no node, so they move at once on the threads),
-// the body contacts last, in order: the same bits on any thread count.
+// colour (law/RowColouring: a colour's contacts share no node, so they move at once on the threads)
+// or block by block (law/RowBlocks: the blocks at once, then the seam), the body contacts last, in
+// order: the same bits on any thread count.
 //
 // The check (`checkDepth` >= 0, CollisionStage::beforeDrift): the same projection once more at the
 // step's start, after the flattening passes, with no allowance (flattening has had its turn), seeded
@@ -26,6 +27,7 @@
 #include "geom/BodyContact.hpp"
 #include "geom/CPContact.hpp"
 #include "law/ContactParams.hpp"
+#include "law/RowBlocks.hpp"
 #include "law/RowColouring.hpp"
 #include <functional>
 #include <vector>
@@ -80,6 +82,7 @@ class PositionProjection {
   std::vector<Slot> slots_;           // the contacts in colour order
   std::vector<Real> outcome_;         // per slot: the overlap its contact's move in this sweep took out [m] (0: none)
   RowColouring colouring_;            // of the contacts, by their four nodes
+  RowBlocks blocking_;                // of the contacts, by their four nodes (SweepOrder::Blocked)
   std::vector<Index> elems_;          // the CPs with a moved node, in order
   std::vector<std::uint8_t> movedBefore_, movedNow_, movedAny_;  // per node: moved in the sweep before / in this one / at all
   std::vector<Real> travel_;                          // per node: distance moved in this call (and the check before it) [m]

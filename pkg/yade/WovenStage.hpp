@@ -89,7 +89,7 @@ public:
 		((Real, bodyFriction, 0.0, , "Coulomb coefficient between a coupled YADE body and the yarns, in [0, 2]."))
 		((Real, tolerance, 1e-6, , "Resting band and solver tolerance on the normal velocity [m/s] > 0."))
 		((int, maxIterations, 50, , "Bound on the impulse sweeps per step, >= 1."))
-		((std::string, sweepOrder, "sequential", , "Row order of the sweeps: 'sequential' (contact order) or 'coloured' (rows of a colour on the threads)."))
+		((std::string, sweepOrder, "sequential", , "Row order of the sweeps: 'sequential' (contact order), 'coloured' (rows of a colour on the threads) or 'blocked' (slabs of the ply on the threads, then the rows across them)."))
 		((int, projectionSweeps, -1, , "Sweeps of the position projection after the drift, in [0, 50], or -1 (auto: 8 with model 'gap' and response 'impulse', else 0)."))
 		((Real, projectionSlop, 0.5e-6, , "Overlap the projection leaves alone [m], in [0, 1e-3]."))
 		((Real, projectionMaxMove, 10e-6, , "Most one contact moves a node in a projection [m], in (0, 1e-3]."))

@@ -38,8 +38,9 @@ CONTACT_KEYS = {
     'projection_max_move': (10e-6, 'm', 'most one contact moves a node in the position projection (3x this in all), in (0, 1e-3] (deep overlaps go out over a few steps)'),
     'projection_check': (2e-6, 'm', 'contacts still deeper than this after the flattening passes are projected out before the rows '
                          '(what the last projection left to a flattening that did not take it), in [0, 1e-3]; -1: no check'),
-    'sweep_order': ('sequential', '', "row order of the impulse and projection sweeps: 'sequential' (contact order, serial; the default) "
-                    "or 'coloured' (rows that share no node at once on the threads, colour by colour); the same bits for any thread count in either"),
+    'sweep_order': ('sequential', '', "row order of the impulse and projection sweeps: 'sequential' (contact order, serial; the default), "
+                    "'coloured' (rows that share no node at once on the threads, colour by colour) or 'blocked' (slabs of the ply at once on the threads, "
+                    "each in contact order, then the rows across the slabs); the same bits for any thread count in each"),
     'yarn_contacts': (True, '', 'contacts between yarns (False: only with rigid bodies; yarns pass through each other)'),
 }
 

@@ -105,6 +105,10 @@ TEST(HostBridge, StageParamsReachTheCoreAndReadBack) {
   EXPECT_EQ(back.sweepOrder, "sequential");
   EXPECT_EQ(back.sectionRule, "constant_area");
   EXPECT_EQ(back.flattening, "none");
+  sap.sweepOrder = "blocked";
+  hostSetStageParams(e, sap);
+  hostStageParams(e, back);
+  EXPECT_EQ(back.sweepOrder, "blocked");
 }
 
 TEST(HostBridge, BadStageParamsAreRefusedUnchanged) {

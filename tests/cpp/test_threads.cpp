@@ -6,6 +6,8 @@
 #include "chain_util.hpp"
 #include "core/Parallel.hpp"
 #include "engine/FabricEngine.hpp"
+#include "law/ImpulseLaw.hpp"
+#include "law/RowBlocks.hpp"
 #include "law/RowColouring.hpp"
 #include "weave/WeaveBuilder.hpp"
 #include <gtest/gtest.h>
@@ -88,7 +90,8 @@ Outcome tension(int threads, int steps) {
 // A 40 x 40-yarn ply (one CP per crossing, ~3200 CPs, every yarn end clamped, grid broad phase) and
 // a 3 mm, 1 g cube touching its middle at 1000 m/s; breakage at 1 % raw strain; friction between
 // yarns and with the cube.
-Outcome ballistic(int threads, int steps, BroadPhase broad = BroadPhase::Grid, Real skin = 1e-5) {
+Outcome ballistic(int threads, int steps, BroadPhase broad = BroadPhase::Grid, Real skin = 1e-5,
+                  SweepOrder order = SweepOrder::Coloured) {
   setThreads(threads);
   WeaveParams p = km2_706();
   p.nx = p.ny = 20;
@@ -97,7 +100,7 @@ Outcome ballistic(int threads, int steps, BroadPhase broad = BroadPhase::Grid, R
   ContactParams c;
   c.positionCorrection = 0, c.flattenPasses = 1, c.maxIterations = 10, c.skin = skin;
   c.friction = 0.1, c.bodyFriction = 0.2;  // friction's energy share is summed per row, then in row order
-  c.sweepOrder = SweepOrder::Coloured;      // the order whose sweeps run on the threads
+  c.sweepOrder = order;  // an order whose sweeps run on the threads
   e.enableCollisions(c, broad);
   for (const Yarn& y : e.fabric().yarns) e.dynamics().fix(y.firstNode), e.dynamics().fix(y.firstNode + y.nNodes - 1);
   BreakageParams b;
@@ -126,6 +129,14 @@ TEST(Threads, BallisticSceneWithBreakageIsTheSameBitsOnOneTwoAndThreeThreads) {
   EXPECT_GT(one.broken, 0) << "the cube breaks yarns within the run";
   EXPECT_GT(one.bodyVel.z(), -1000) << "the ply slows the cube";
   for (int t : {2, 3}) expectSame(one, ballistic(t, steps), t);
+}
+
+TEST(Threads, BlockedSweepsGiveTheSameBitsOnOneTwoAndThreeThreads) {
+  const int steps = static_cast<int>(runLength(300, 3));
+  const Outcome one = ballistic(1, steps, BroadPhase::Grid, 1e-5, SweepOrder::Blocked);
+  EXPECT_GT(one.broken, 0) << "the cube breaks yarns within the run";
+  EXPECT_GT(one.bodyVel.z(), -1000) << "the ply slows the cube";
+  for (int t : {2, 3}) expectSame(one, ballistic(t, steps, BroadPhase::Grid, 1e-5, SweepOrder::Blocked), t);
 }
 
 // The broad phase only lists candidates: the narrow phase decides each pair from its positions, so
@@ -239,4 +250,82 @@ TEST(Threads, ContactThreadsForceTheStageCountOnly) {
   EXPECT_EQ(parameterOf([&] { p.validate(); }), "threads");
   p.threads = 65;
   EXPECT_EQ(parameterOf([&] { p.validate(); }), "threads");
+}
+
+// The blocks of the struck ply's last contact set (law/RowBlocks): every row once, each group's rows
+// in row order, the body rows in the tail, no node in the rows of two blocks (what lets the blocks
+// run at once), every block a fair share of the rows and the seam (solved on one thread) small.
+TEST(Threads, RowsOfTwoBlocksShareNoNodeOnAStruckPly) {
+  const Outcome o = ballistic(1, static_cast<int>(runLength(300, 3)), BroadPhase::Grid, 1e-5, SweepOrder::Blocked);
+  const std::vector<CPContact>& cs = o.contactList;
+  const Index nYarn = static_cast<Index>(cs.size()), nRows = nYarn + static_cast<Index>(o.bodyContactList.size());
+  ASSERT_GT(o.bodyContactList.size(), 0u) << "the cube touches the ply";
+  ASSERT_GT(nYarn, 1000);
+  WeaveParams p = km2_706();
+  p.nx = p.ny = 20;
+  p.cpPerSpan = 1;
+  const Fabric f = buildWeave(p).fabric;
+  const auto rowNodes = [&](Index r, Index* node) {
+    if (r >= nYarn) return -1;
+    node[0] = f.elem0[cs[r].cpA], node[1] = node[0] + 1, node[2] = f.elem0[cs[r].cpB], node[3] = node[2] + 1;
+    return 4;
+  };
+  RowBlocks blocks;
+  blocks.build(nRows, o.pos, rowNodes);
+  ASSERT_EQ(static_cast<Index>(blocks.order().size()), nRows);
+  std::vector<int> seen(static_cast<std::size_t>(nRows), 0), owner(o.pos.size(), -1);
+  for (int g = 0; g <= RowBlocks::kTail; ++g)
+    for (Index k = blocks.begin(g); k < blocks.begin(g + 1); ++k) {
+      const Index r = blocks.order()[k];
+      ++seen[r];
+      EXPECT_EQ(blocks.group(r), g);
+      if (k > blocks.begin(g)) {
+        EXPECT_LT(blocks.order()[k - 1], r);
+      }
+      if (g >= RowBlocks::kSeam) continue;
+      Index node[4];
+      rowNodes(r, node);
+      for (Index i : node) {
+        EXPECT_TRUE(owner[i] == -1 || owner[i] == g) << "node " << i << " in blocks " << owner[i] << " and " << g;
+        owner[i] = g;
+      }
+    }
+  for (Index r = 0; r < nRows; ++r) EXPECT_EQ(seen[r], 1) << "row " << r;
+  for (Index r = nYarn; r < nRows; ++r) EXPECT_EQ(blocks.group(r), RowBlocks::kTail);
+  for (Index r = 0; r < nYarn; ++r) EXPECT_NE(blocks.group(r), RowBlocks::kTail);
+  const Index seam = blocks.begin(RowBlocks::kTail) - blocks.begin(RowBlocks::kSeam);
+  EXPECT_LT(seam, nYarn / 5) << "the seam, solved on one thread";
+  for (int b = 0; b < RowBlocks::kBlocks; ++b)
+    EXPECT_GT(blocks.begin(b + 1) - blocks.begin(b), (nYarn - seam) / (2 * RowBlocks::kBlocks)) << "block " << b;
+}
+
+// Blocked sweeps are Gauss-Seidel in another row order: swept to convergence, they reach the velocities
+// the sequential order reaches (the rows' fixed point: the velocity change of least kinetic energy
+// that meets every row, unique however many rows a node has) on the struck ply's last contacts.
+TEST(Threads, BlockedAndSequentialSweepsConvergeToTheSameVelocities) {
+  const Outcome o = ballistic(1, static_cast<int>(runLength(300, 3)), BroadPhase::Grid, 1e-5, SweepOrder::Blocked);
+  WeaveParams wp = km2_706();
+  wp.nx = wp.ny = 20;
+  wp.cpPerSpan = 1;
+  const auto solved = [&](SweepOrder order, long& rows, long& unresolved) {
+    Fabric f = buildWeave(wp).fabric;
+    f.pos = o.pos, f.vel = o.vel, f.secFlat = o.flat, f.secDir = o.dir, f.alive = o.alive;
+    for (Index i = 0; i < f.nNodes(); ++i) f.vel[i].z() -= 50.0 * (i % 7);  // rows that must push
+    ContactParams p;
+    p.sweepOrder = order, p.maxIterations = 20000, p.tolerance = 1e-9;
+    ImpulseLaw law;
+    ImpulseReport rep;
+    law.resolve(f, o.contactList, [](const CPContact&) { return Real(0); }, 1e-8, p, rep);
+    rows = rep.rows, unresolved = rep.unresolved;
+    return f.vel;
+  };
+  long rowsS = 0, rowsB = 0, missS = 0, missB = 0;
+  const Vec3Array vS = solved(SweepOrder::Sequential, rowsS, missS), vB = solved(SweepOrder::Blocked, rowsB, missB);
+  ASSERT_GT(rowsS, 1000);
+  EXPECT_EQ(rowsB, rowsS);
+  EXPECT_EQ(missS, 0);
+  EXPECT_EQ(missB, 0);
+  Real worst = 0, fastest = 0;
+  for (std::size_t i = 0; i < vS.size(); ++i) worst = std::max(worst, (vS[i] - vB[i]).norm()), fastest = std::max(fastest, vS[i].norm());
+  EXPECT_LT(worst, 1e-9 * fastest) << "largest difference " << worst << " m/s of " << fastest;
 }

@@ -34,8 +34,9 @@ def test_bench_threads_same_bits(tmp_path):
 
 
 def test_bench_ballistic_same_bits_on_two_threads(tmp_path):
-    # The struck ply (impulse rows on the projectile, coloured sweeps, position projection) on 1 and 2
-    # threads in one process: the same bits; a thread count out of range is refused, naming the key.
+    # The struck ply (impulse rows on the projectile, blocked sweeps, position projection) on 1 and 2
+    # threads in one process: the same bits; a thread count or sweep order out of range is refused,
+    # naming the key.
     script = os.path.join(ROOT, 'scripts', 'bench_ballistic.py')
     cmd = ['yade', '-j', '2', '-n', '-x', script, 'out=%s' % tmp_path, 'side=0.0254', 't_end=5e-6', 'chain_steps=20',
            'threads=2']
@@ -45,6 +46,10 @@ def test_bench_ballistic_same_bits_on_two_threads(tmp_path):
     s = json.load(open(os.path.join(str(tmp_path), 'summary.json')))
     assert s['measured']['same_bits'] is True and s['status'] == 'ok'
     assert s['measured']['cps'] > 2048 and s['measured']['speedup'] > 0
+    assert s['measured']['sweep_order'] == 'blocked'  # the default with threads >= 2
     bad = subprocess.run(['yade', '-n', '-x', script, 'out=%s' % tmp_path, 'threads=0'], cwd=str(tmp_path),
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode != 0 and 'threads = 0 is invalid' in bad.stdout + bad.stderr
+    bad = subprocess.run(['yade', '-n', '-x', script, 'out=%s' % tmp_path, 'sweep_order=red-black'], cwd=str(tmp_path),
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode != 0 and "sweep_order = 'red-black' is invalid" in bad.stdout + bad.stderr

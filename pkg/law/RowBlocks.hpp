@@ -1,0 +1,110 @@
+// Blocks of the rows of a Gauss-Seidel sweep (law/ImpulseLaw's impulse rows, law/PositionProjection's
+// contacts): a sweep that runs on several threads with one barrier, and gives the same bits on any
+// count.
+//
+// The rows' nodes are cut into kBlocks slabs across the widest extent of the rows (equal row counts
+// per slab). A row whose nodes all lie in one slab belongs to that slab's block; blocks share no
+// node, so they are solved at once, each block's rows one after another in row order, and the result
+// is what solving the blocks one after another gives. The rows that cross a cut (the seam) and the
+// rows on a rigid body (the tail: all of a projectile's rows share it) follow, in row order, on one
+// thread. This is block Gauss-Seidel with the interface last (the domain-decomposition ordering of
+// Gauss-Seidel; Saad, "Iterative Methods for Sparse Linear Systems", 2nd ed., Sec. 12.4 and 14.2),
+// still Gauss-Seidel, in another row order than the list's. Against law/RowColouring it costs a
+// barrier per sweep instead of one per colour, and keeps the list's order (neighbouring rows one
+// after another) inside each block.
+//
+// The blocks are a function of the row list and the node positions alone (kBlocks is fixed, not the
+// thread count): the same order for any thread count.
+#pragma once
+#include "core/Types.hpp"
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace woven {
+
+class RowBlocks {
+ public:
+  /// Blocks of a sweep (fixed: the order must not depend on the thread count); 8 keep two to four
+  /// threads busy with equal shares while the seam stays a few percent of the rows.
+  static constexpr int kBlocks = 8;
+  /// Groups in order(): blocks 0 .. kBlocks - 1, then the seam (kSeam), then the tail (kTail).
+  static constexpr int kSeam = kBlocks, kTail = kBlocks + 1;
+
+  /// Blocks rows [0, nRows): nodesOf(r, node) writes row r's nodes into node[0..3] and returns how
+  /// many (at most 4), or -1 for a row of the tail; pos: the node positions [m].
+  template <class NodesOf>
+  void build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf);
+
+  /// Group of row r (a block, kSeam or kTail).
+  int group(Index r) const { return group_[r]; }
+  /// The rows by group, each group's rows in row order: group g is order()[begin(g) .. begin(g + 1)).
+  const std::vector<Index>& order() const { return order_; }
+  Index begin(int g) const { return start_[g]; }
+
+ private:
+  static constexpr int kBins = 64 * kBlocks;  // histogram of the rows along the cut axis
+  std::vector<std::uint8_t> group_;
+  std::vector<Index> order_;
+  std::array<Index, kBlocks + 3> start_ = {};
+};
+
+template <class NodesOf>
+void RowBlocks::build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf) {
+  group_.resize(static_cast<std::size_t>(nRows));
+  // The extent of the rows' first nodes; the cuts run across its widest axis.
+  Vec3 lo = Vec3::Constant(std::numeric_limits<Real>::infinity()), hi = -lo;
+  Index yarnRows = 0;
+  for (Index r = 0; r < nRows; ++r) {
+    Index node[4];
+    if (nodesOf(r, node) < 0) continue;
+    lo = lo.cwiseMin(pos[node[0]]), hi = hi.cwiseMax(pos[node[0]]);
+    ++yarnRows;
+  }
+  int axis = 0;
+  if (yarnRows > 0) (hi - lo).maxCoeff(&axis);
+  const Real origin = yarnRows > 0 ? lo[axis] : 0, width = yarnRows > 0 ? hi[axis] - lo[axis] : 0;
+  const Real perBin = width > 0 ? kBins / width : 0;
+  const auto bin = [&](Index node) {
+    const Real x = (pos[node][axis] - origin) * perBin;  // NaN-safe: !(x > 0) goes to bin 0
+    return x > 0 ? std::min(static_cast<int>(x), kBins - 1) : 0;
+  };
+  // Equal row counts per block: bins are given to block b until b + 1 shares of the rows are in.
+  std::array<Index, kBins> count = {};
+  for (Index r = 0; r < nRows; ++r) {
+    Index node[4];
+    if (nodesOf(r, node) >= 0) ++count[bin(node[0])];
+  }
+  std::array<std::uint8_t, kBins> blockOf = {};
+  Index below = 0;
+  int b = 0;
+  for (int k = 0; k < kBins; ++k) {
+    while (b < kBlocks - 1 && below >= (b + 1) * yarnRows / kBlocks) ++b;
+    blockOf[k] = static_cast<std::uint8_t>(b);
+    below += count[k];
+  }
+  // Each row's group, then a stable counting sort by group.
+  std::array<Index, kBlocks + 2> size = {};
+  for (Index r = 0; r < nRows; ++r) {
+    Index node[4];
+    const int n = nodesOf(r, node);
+    int g = kTail;
+    if (n > 0) {
+      g = blockOf[bin(node[0])];
+      for (int k = 1; k < n; ++k)
+        if (blockOf[bin(node[k])] != g) g = kSeam;
+    }
+    group_[r] = static_cast<std::uint8_t>(g);
+    ++size[g];
+  }
+  start_[0] = 0;
+  for (int g = 0; g <= kTail; ++g) start_[g + 1] = start_[g] + size[g];
+  std::array<Index, kBlocks + 2> next;
+  for (int g = 0; g <= kTail; ++g) next[g] = start_[g];
+  order_.resize(static_cast<std::size_t>(nRows));
+  for (Index r = 0; r < nRows; ++r) order_[next[group_[r]]++] = r;
+}
+
+}  // namespace woven
