@@ -46,6 +46,11 @@ class RowBlocks {
 
  private:
   static constexpr int kBins = 64 * kBlocks;  // histogram of the rows along the cut axis
+  struct RowNodes {
+    Index node[4];
+    int n;
+  };
+  std::vector<RowNodes> nodes_;
   std::vector<std::uint8_t> group_;
   std::vector<Index> order_;
   std::array<Index, kBlocks + 3> start_ = {};
@@ -54,15 +59,18 @@ class RowBlocks {
 template <class NodesOf>
 void RowBlocks::build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf) {
   group_.resize(static_cast<std::size_t>(nRows));
-  // The extent of the rows' first nodes; the cuts run across its widest axis.
+  // Each row's nodes, read once (a row is a large record; the passes below read these 20 bytes).
+  nodes_.resize(static_cast<std::size_t>(nRows));
   Vec3 lo = Vec3::Constant(std::numeric_limits<Real>::infinity()), hi = -lo;
   Index yarnRows = 0;
   for (Index r = 0; r < nRows; ++r) {
-    Index node[4];
-    if (nodesOf(r, node) < 0) continue;
-    lo = lo.cwiseMin(pos[node[0]]), hi = hi.cwiseMax(pos[node[0]]);
+    RowNodes& q = nodes_[r];
+    q.n = nodesOf(r, q.node);
+    if (q.n <= 0) continue;
+    lo = lo.cwiseMin(pos[q.node[0]]), hi = hi.cwiseMax(pos[q.node[0]]);  // the extent of the rows' first nodes
     ++yarnRows;
   }
+  // The cuts run across the extent's widest axis, at equal row counts.
   int axis = 0;
   if (yarnRows > 0) (hi - lo).maxCoeff(&axis);
   const Real origin = yarnRows > 0 ? lo[axis] : 0, width = yarnRows > 0 ? hi[axis] - lo[axis] : 0;
@@ -71,12 +79,10 @@ void RowBlocks::build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf) {
     const Real x = (pos[node][axis] - origin) * perBin;  // NaN-safe: !(x > 0) goes to bin 0
     return x > 0 ? std::min(static_cast<int>(x), kBins - 1) : 0;
   };
-  // Equal row counts per block: bins are given to block b until b + 1 shares of the rows are in.
+  // A histogram of the rows' first nodes; bins go to block b until b + 1 shares of the rows are in.
   std::array<Index, kBins> count = {};
-  for (Index r = 0; r < nRows; ++r) {
-    Index node[4];
-    if (nodesOf(r, node) >= 0) ++count[bin(node[0])];
-  }
+  for (const RowNodes& q : nodes_)
+    if (q.n > 0) ++count[bin(q.node[0])];
   std::array<std::uint8_t, kBins> blockOf = {};
   Index below = 0;
   int b = 0;
@@ -88,13 +94,12 @@ void RowBlocks::build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf) {
   // Each row's group, then a stable counting sort by group.
   std::array<Index, kBlocks + 2> size = {};
   for (Index r = 0; r < nRows; ++r) {
-    Index node[4];
-    const int n = nodesOf(r, node);
+    const RowNodes& q = nodes_[r];
     int g = kTail;
-    if (n > 0) {
-      g = blockOf[bin(node[0])];
-      for (int k = 1; k < n; ++k)
-        if (blockOf[bin(node[k])] != g) g = kSeam;
+    if (q.n > 0) {
+      g = blockOf[bin(q.node[0])];
+      for (int k = 1; k < q.n; ++k)
+        if (blockOf[bin(q.node[k])] != g) g = kSeam;
     }
     group_[r] = static_cast<std::uint8_t>(g);
     ++size[g];
