@@ -1,13 +1,14 @@
 # Speed-up of woven's OpenMP threads on the tension scene (scripts/tension.py's scene: KM2 706, sections
 # settled, warp ends held and pulled along +x at 1 m/s, collisions on), all in one process:
-#   yade -j 2 -n -x scripts/bench_threads.py [nx=50] [ny=50] [steps=200] [threads=2] [repeats=2] [out=DIR]
+#   yade -j 2 -n -x scripts/bench_threads.py [nx=50] [ny=50] [steps=200] [threads=2] [repeats=2] [sweep_order=blocked] [out=DIR]
 # Run it with yade -j N (N = threads): without -j YADE sets OMP_NUM_THREADS=1, and libgomp then lets its
 # idle threads sleep between parallel regions instead of spinning, which costs the forced threads
 # their gain (measured: 0.97x instead of 1.5x; OMP_WAIT_POLICY=active restores it).
 # nx = ny = 50 repeats of the plain 2 x 2 pattern is 100 x 100 yarns (80 000 CPs). For each repeat the
 # scene is built and run for `steps` steps on 1 thread, then on `threads` threads (woven.set_threads,
 # which reaches the stepping thread whatever yade -j says); the wall time of the steps alone is
-# measured. Prints the times, the speed-up (best and each repeat) against the goal (1.8x on 2 cores),
+# measured. Both runs sweep the rows in `sweep_order` (default 'blocked', whose sweeps use the threads;
+# tension.py's own order is the serial 'sequential'). Prints the times, the speed-up (best and each repeat) against the goal (1.8x on 2 cores),
 # and checks that the runs end in the same bits (positions, velocities, sections, energy books).
 # Writes out/bench_threads/summary.json. Other processes on the machine make the speed-up smaller.
 import time
@@ -24,6 +25,8 @@ p = read_params({'nx': (50, '', 'repeats along x (2 weft yarns each): 50 gives 1
                  'repeats': (2, '', 'pairs of runs (1 thread, then `threads`)'),
                  'velocity': (1.0, 'm/s', 'grip speed'),
                  'goal': (1.8, '', 'goal for the speed-up on 2 cores'),
+                 'sweep_order': ('blocked', '', "row order of the impulse and projection sweeps in both runs: 'blocked' "
+                                 "(slabs of the ply at once on the threads), 'coloured' or 'sequential' (serial: tension.py's)"),
                  'out': ('', '', 'output folder (default out/bench_threads)')})
 for k, lo in (('nx', 1), ('ny', 1), ('steps', 1), ('threads', 1), ('repeats', 1)):
     if p[k] < lo:
@@ -32,7 +35,10 @@ d = out_dir('bench_threads', p)
 if woven.openmp_threads() < p.threads:
     print('bench_threads: WARNING: OpenMP has %d thread(s) here (yade -j %d missing?): idle threads sleep between '
           'regions and the speed-up is understated' % (woven.openmp_threads(), p.threads))
+if p.sweep_order not in ('sequential', 'coloured', 'blocked'):
+    raise ValueError("sweep_order = %r is invalid: allowed 'sequential', 'coloured' or 'blocked'" % (p.sweep_order,))
 contact_args = {k: v[0] for k, v in CONTACT_KEYS.items()}
+contact_args['sweep_order'] = p.sweep_order
 
 
 def run(threads):
@@ -72,7 +78,7 @@ ratios = [a / b for a, b in zip(times1, timesN)]
 best = min(times1) / min(timesN)
 measured = {'cps': cps, 'contacts_end': contacts, 'steps': p.steps, 'seconds_1_thread': times1,
             'seconds_n_threads': timesN, 'speedup_per_repeat': ratios, 'speedup_best': best,
-            'same_bits': bool(same), 'openmp_threads_at_start': woven.openmp_threads()}
+            'same_bits': bool(same), 'openmp_threads_at_start': woven.openmp_threads(), 'sweep_order': p.sweep_order}
 checks = {'same_bits': {'value': bool(same), 'limit': True, 'passed': bool(same),
                         'what': 'positions, velocities, sections and energy books equal bit for bit on 1 and N threads'}}
 status = 'ok' if same else 'failed'

@@ -94,6 +94,8 @@ class ImpulseLaw {
  private:
   struct Row {
     Index node[4];
+    int body = -1;      // B side: a rigid body (weights w[2], w[3] are 0), at arm r from its centre;
+                        // beside the nodes: the colouring and the blocks read both, and nothing else
     Real w[4];          // -(1-sA), -sA, (1-sB), sB: vn = sum w_k v_k . n
     Vec3 n;
     Real target, invK;  // invK = m_eff = 1 / sum w^2/m
@@ -102,7 +104,6 @@ class ImpulseLaw {
     Vec3 lambdaT = Vec3::Zero();
     Vec3 kick = Vec3::Zero();  // (dt/2) sum w_k a_k of the fabric nodes (friction's energy share) [m/s]
     Real frictionTaken = 0;    // the tangential parts' energy share over this resolve's sweeps, taken out [J]
-    int body = -1;      // B side: a rigid body (weights w[2], w[3] are 0), at arm r from its centre
     Vec3 arm = Vec3::Zero();
   };
   // What an update without friction of a row on no body reads and writes, packed (104 B against a
