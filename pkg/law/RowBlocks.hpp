@@ -16,6 +16,7 @@
 // The blocks are a function of the row list and the node positions alone (kBlocks is fixed, not the
 // thread count): the same order for any thread count.
 #pragma once
+#include "core/Parallel.hpp"
 #include "core/Types.hpp"
 #include <algorithm>
 #include <array>
@@ -59,13 +60,13 @@ class RowBlocks {
 template <class NodesOf>
 void RowBlocks::build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf) {
   group_.resize(static_cast<std::size_t>(nRows));
-  // Each row's nodes, read once (a row is a large record; the passes below read these 20 bytes).
+  // Each row's nodes, read once (a row is a large record; the passes below read these 20 bytes);
+  // the loops that write one row's items run on the threads (nodesOf only reads).
   nodes_.resize(static_cast<std::size_t>(nRows));
+  parallelFor(nRows, kParallelGrain, threads(), [&](Index r) { nodes_[r].n = nodesOf(r, nodes_[r].node); });
   Vec3 lo = Vec3::Constant(std::numeric_limits<Real>::infinity()), hi = -lo;
   Index yarnRows = 0;
-  for (Index r = 0; r < nRows; ++r) {
-    RowNodes& q = nodes_[r];
-    q.n = nodesOf(r, q.node);
+  for (const RowNodes& q : nodes_) {
     if (q.n <= 0) continue;
     lo = lo.cwiseMin(pos[q.node[0]]), hi = hi.cwiseMax(pos[q.node[0]]);  // the extent of the rows' first nodes
     ++yarnRows;
@@ -92,8 +93,7 @@ void RowBlocks::build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf) {
     below += count[k];
   }
   // Each row's group, then a stable counting sort by group.
-  std::array<Index, kBlocks + 2> size = {};
-  for (Index r = 0; r < nRows; ++r) {
+  parallelFor(nRows, kParallelGrain, threads(), [&](Index r) {
     const RowNodes& q = nodes_[r];
     int g = kTail;
     if (q.n > 0) {
@@ -102,8 +102,9 @@ void RowBlocks::build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf) {
         if (blockOf[bin(q.node[k])] != g) g = kSeam;
     }
     group_[r] = static_cast<std::uint8_t>(g);
-    ++size[g];
-  }
+  });
+  std::array<Index, kBlocks + 2> size = {};
+  for (std::uint8_t g : group_) ++size[g];
   start_[0] = 0;
   for (int g = 0; g <= kTail; ++g) start_[g + 1] = start_[g] + size[g];
   std::array<Index, kBlocks + 2> next;
