@@ -483,6 +483,10 @@ BOOST_PYTHON_MODULE(_woven) {
           "Threads of woven's loops in every engine: n >= 1 forces n, 0 follows OpenMP (OMP_NUM_THREADS, YADE's "
           "-j N). Results are the same bits at any count (docs/design.md, Threads).");
   bp::def("threads", +[]() { return threads(); }, "Threads woven's loops use now (in the calling thread).");
+  bp::def("release_threads", +[]() { return releaseThreads(); },
+          "Ends the calling thread's idle OpenMP team (woven.attach does it: the script's thread hands the "
+          "stepping to YADE's loop thread). While a team idles in another thread, libgomp makes every team's "
+          "threads sleep at each barrier, and two threads gain little (docs/design.md, Threads). True when done.");
   bp::def("openmp_threads", +[]() { return openmpThreads(); },
           "OpenMP's count in the calling thread (omp_get_max_threads; 1 without OpenMP).");
 

@@ -73,9 +73,11 @@ base = woven.ballistic.build_ply(weave_args, contact_args, side=p.side, clamp=4,
 be = base.engine
 be.disable_collisions()
 dt = 0.7 * be.dt_crit
+woven.set_threads(1)  # one core, as the coupled run it is compared with
 t0 = time.perf_counter()
 be.run(dt, p.chain_steps)
 chain_seconds = time.perf_counter() - t0
+woven.set_threads(0)
 chain_rate = be.n_elements * p.chain_steps / chain_seconds
 
 # 2. the coupled scene (3.: again on p.threads threads)

@@ -62,6 +62,21 @@ class ThreadCountScope {
   int saved_;
 };
 
+/// Ends the calling thread's idle OpenMP team (omp_pause_resource_all, OpenMP 5.0); the next
+/// parallel region of this thread starts a new one. Call it where another thread takes over the
+/// stepping (YADE's loop thread after a script built the scene): while a team idles in one thread,
+/// libgomp counts more threads than cores and every team's threads sleep at once at each barrier
+/// instead of spinning (measured: a region of 20 000 items in the other thread 107 us instead of
+/// 6 us; the default ballistic scene on 2 threads 1.04x instead of 1.57x). Returns false inside a
+/// parallel region (nothing done) and without OpenMP.
+inline bool releaseThreads() {
+#ifdef _OPENMP
+  return omp_pause_resource_all(omp_pause_soft) == 0;
+#else
+  return false;
+#endif
+}
+
 /// Items below which a loop of light bodies (a node, a box) stays on one thread.
 constexpr Index kParallelGrain = 2048;
 

@@ -17,7 +17,7 @@ import re
 
 import yade.wrapper
 
-from ._woven import FabricEngine
+from ._woven import FabricEngine, release_threads
 from . import _native  # the native YADE plugin's engine, when installed (docs/yade_native.md)
 
 _O = yade.wrapper.Omega()
@@ -104,6 +104,9 @@ def attach(engine, set_dt=True, safety=0.7, label=None, append=True):
     # when a NewtonIntegrator runs before the adapter: the step rewinds them to x_n first.
     newton = [i for i, e in enumerate(_O.engines) if isinstance(e, yade.wrapper.NewtonIntegrator) and not e.dead]
     rewind = bool(newton) and append
+    # YADE's loop thread steps from here on: the script's thread lets its idle OpenMP team go, or it
+    # would make the loop thread's team sleep at every barrier (docs/design.md, Threads).
+    release_threads()
     if native:  # the plugin's GlobalEngine: the same step in C++, no Python per iteration
         runner = _native.make(engine, rewind, label)
         if append:

@@ -230,6 +230,26 @@ TEST(Threads, RowsOfAColourShareNoNodeOnAStruckPly) {
   EXPECT_GT(o.impulseRows, 0);
 }
 
+// releaseThreads ends the calling thread's idle team between regions (OpenMP 5.0 pause), and refuses
+// inside a region; a scene stepped after it (a new team) gives the bits of one stepped without.
+TEST(Threads, ReleaseEndsTheIdleTeamOutsideARegionOnly) {
+#ifdef _OPENMP
+  std::vector<int> inside(2, -1);
+#pragma omp parallel num_threads(2)
+  inside[omp_get_thread_num()] = releaseThreads();
+  EXPECT_EQ(inside[0], 0) << "refused inside a region";
+  EXPECT_TRUE(releaseThreads());
+  const int steps = static_cast<int>(runLength(60, 2));
+  const Outcome kept = tension(2, steps);
+  setThreads(2);
+  ASSERT_TRUE(releaseThreads());
+  const Outcome released = tension(2, steps);
+  expectSame(kept, released, 2);
+#else
+  EXPECT_FALSE(releaseThreads());
+#endif
+}
+
 // The collision stage's own count (ContactParams::threads >= 1) overrides woven's for its loops only
 // while it runs, and 0 follows woven's.
 TEST(Threads, ContactThreadsForceTheStageCountOnly) {
