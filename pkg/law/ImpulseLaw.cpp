@@ -237,7 +237,7 @@ void ImpulseLaw::colourRows(const Fabric& f, Index n, SweepOrder order, RowAt&& 
     blocking_.build(n, f.pos, nodesOf);
     parallelFor(n, kParallelGrain, threads(), [&](Index k) { rows_[k] = rowAt(blocking_.order()[k]); });
     std::fill(start_, start_ + RowColouring::kColours + 2, n);
-    for (int b = 0; b <= RowBlocks::kBlocks; ++b) start_[b] = blocking_.begin(b);
+    for (int g = 0; g <= RowBlocks::kSeam; ++g) start_[g] = blocking_.begin(g);
     start_[RowColouring::kColours] = blocking_.begin(RowBlocks::kSeam);  // the seam, then the body rows
     colours_ = 0, blocks_ = RowBlocks::kBlocks;
     return;
@@ -290,7 +290,8 @@ Real ImpulseLaw::solveRow(Fabric& f, SweepRow& r) {
 // Coloured sweeps: the colours in order, each colour's rows on the threads (they share no node:
 // each writes only its own nodes, so any split gives the same bits), then the serial tail (the
 // rows on a body) in order. Blocked sweeps: the blocks at once, each block's rows in order (blocks
-// share no node), then the tail (the seam, then the rows on a body) in order. The misses are kept
+// share no node), then the cuts' rows in two phases, then the tail (the seam, then the rows on a
+// body) in order. The misses are kept
 // per row; their largest is order-free.
 // Whether the colours are split over the threads changes no result, only the time: a sweep costs
 // a barrier per colour, and on cores busy with other processes each barrier waits for a thread
@@ -320,11 +321,15 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
   for (int it = 0; it < p.maxIterations; ++it) {
     const bool split = nThreads > 1 && (it == 0 || (it > 1 && seconds[0] <= seconds[1]));
     const auto t0 = Clock::now();
-    // Blocks: each on a thread, its rows in order (a barrier per sweep).
-    parallelFor(blocks_, 1, split ? nThreads : 1, [&](Index b) {
-      for (Index k = start_[b]; k < start_[b + 1]; ++k)
-        miss_[k] = packed ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
-    });
+    // Blocks, then the rows across the even cuts, then the odd cuts': the groups of a phase each on
+    // a thread, its rows in order (law/RowBlocks).
+    for (int phase = 0; blocks_ > 0 && phase < RowBlocks::kPhases; ++phase) {
+      const int g0 = RowBlocks::phaseBegin(phase);
+      parallelFor(RowBlocks::phaseBegin(phase + 1) - g0, 1, split ? nThreads : 1, [&](Index q) {
+        for (Index k = start_[g0 + q]; k < start_[g0 + q + 1]; ++k)
+          miss_[k] = packed ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
+      });
+    }
     for (int c = 0; c < colours; ++c) {
       const Index b = start_[c];
       if (packed)

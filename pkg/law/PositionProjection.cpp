@@ -112,11 +112,15 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     // The first sweep measures every contact (a check's, only its seeds): its colours on the
     // threads. The later ones skip most contacts on their slot alone: on one thread, in the same
     // order (the same bits; a barrier per colour would cost more than the work where the cores are
-    // busy). The blocks cost one barrier a sweep: every sweep but a check's on the threads.
+    // busy). The blocks cost three barriers a sweep: every sweep but a check's on the threads.
     if (blocked)
-      parallelFor(RowBlocks::kBlocks, 1, check ? 1 : nThreads, [&](Index b) {
-        for (Index k = blocking_.begin(b); k < blocking_.begin(b + 1); ++k) outcome_[k] = projectOne(slots_[k], first);
-      });
+      for (int phase = 0; phase < RowBlocks::kPhases; ++phase) {
+        const int g0 = RowBlocks::phaseBegin(phase);
+        parallelFor(RowBlocks::phaseBegin(phase + 1) - g0, 1, check ? 1 : nThreads, [&](Index q) {
+          for (Index k = blocking_.begin(g0 + q); k < blocking_.begin(g0 + q + 1); ++k)
+            outcome_[k] = projectOne(slots_[k], first);
+        });
+      }
     else
       for (int col = 0; col < colouring_.colours(); ++col) {
         const Index b = colouring_.begin(col);

@@ -1,16 +1,17 @@
 // Blocks of the rows of a Gauss-Seidel sweep (law/ImpulseLaw's impulse rows, law/PositionProjection's
-// contacts): a sweep that runs on several threads with one barrier, and gives the same bits on any
+// contacts): a sweep that runs on several threads with three barriers, and gives the same bits on any
 // count.
 //
 // The rows' nodes are cut into kBlocks slabs across the widest extent of the rows (equal row counts
 // per slab). A row whose nodes all lie in one slab belongs to that slab's block; blocks share no
 // node, so they are solved at once, each block's rows one after another in row order, and the result
-// is what solving the blocks one after another gives. The rows that cross a cut (the seam) and the
-// rows on a rigid body (the tail: all of a projectile's rows share it) follow, in row order, on one
-// thread. This is block Gauss-Seidel with the interface last (the domain-decomposition ordering of
+// is what solving the blocks one after another gives. The rows across one cut follow, the even cuts'
+// at once, then the odd cuts' (the rows of cuts c and c + 2 share no node). The rows across two cuts
+// or more (the seam) and the rows on a rigid body (the tail: all of a projectile's rows share it)
+// follow, in row order, on one thread. This is block Gauss-Seidel with the interface last (the domain-decomposition ordering of
 // Gauss-Seidel; Saad, "Iterative Methods for Sparse Linear Systems", 2nd ed., Sec. 12.4 and 14.2),
-// still Gauss-Seidel, in another row order than the list's. Against law/RowColouring it costs a
-// barrier per sweep instead of one per colour, and keeps the list's order (neighbouring rows one
+// still Gauss-Seidel, in another row order than the list's. Against law/RowColouring it costs three
+// barriers per sweep instead of one per colour, and keeps the list's order (neighbouring rows one
 // after another) inside each block.
 //
 // The blocks are a function of the row list and the node positions alone (kBlocks is fixed, not the
@@ -29,17 +30,23 @@ namespace woven {
 class RowBlocks {
  public:
   /// Blocks of a sweep (fixed: the order must not depend on the thread count); 8 keep two to four
-  /// threads busy with equal shares while the seam stays a few percent of the rows.
+  /// threads busy with equal shares.
   static constexpr int kBlocks = 8;
-  /// Groups in order(): blocks 0 .. kBlocks - 1, then the seam (kSeam), then the tail (kTail).
-  static constexpr int kSeam = kBlocks, kTail = kBlocks + 1;
+  /// Groups in order(), solved in three phases, the groups of a phase at once (they share no node):
+  /// the blocks 0 .. kBlocks - 1; the rows across the even cuts (cut c lies between blocks c and
+  /// c + 1); those across the odd cuts; then, on one thread, the rows across two cuts or more (kSeam)
+  /// and the tail (kTail).
+  static constexpr int kPhases = 3;
+  static constexpr int kSeam = kBlocks + kBlocks - 1, kTail = kSeam + 1;
+  /// First group of phase p in [0, kPhases] (phase kPhases: the serial part).
+  static constexpr int phaseBegin(int p) { return p == 0 ? 0 : p == 1 ? kBlocks : p == 2 ? kBlocks + kBlocks / 2 : kSeam; }
 
   /// Blocks rows [0, nRows): nodesOf(r, node) writes row r's nodes into node[0..3] and returns how
   /// many (at most 4), or -1 for a row of the tail; pos: the node positions [m].
   template <class NodesOf>
   void build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf);
 
-  /// Group of row r (a block, kSeam or kTail).
+  /// Group of row r (a block, a cut, kSeam or kTail).
   int group(Index r) const { return group_[r]; }
   /// The rows by group, each group's rows in row order: group g is order()[begin(g) .. begin(g + 1)).
   const std::vector<Index>& order() const { return order_; }
@@ -54,7 +61,7 @@ class RowBlocks {
   std::vector<RowNodes> nodes_;
   std::vector<std::uint8_t> group_;
   std::vector<Index> order_;
-  std::array<Index, kBlocks + 3> start_ = {};
+  std::array<Index, kTail + 2> start_ = {};
 };
 
 template <class NodesOf>
@@ -97,17 +104,23 @@ void RowBlocks::build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf) {
     const RowNodes& q = nodes_[r];
     int g = kTail;
     if (q.n > 0) {
-      g = blockOf[bin(q.node[0])];
-      for (int k = 1; k < q.n; ++k)
-        if (blockOf[bin(q.node[k])] != g) g = kSeam;
+      int lowest = kBlocks, highest = -1;
+      for (int k = 0; k < q.n; ++k) {
+        const int b = blockOf[bin(q.node[k])];
+        lowest = std::min(lowest, b), highest = std::max(highest, b);
+      }
+      g = highest == lowest ? lowest
+          : highest > lowest + 1 ? kSeam
+          : lowest % 2 == 0 ? kBlocks + lowest / 2  // an even cut
+                            : kBlocks + kBlocks / 2 + lowest / 2;  // an odd cut
     }
     group_[r] = static_cast<std::uint8_t>(g);
   });
-  std::array<Index, kBlocks + 2> size = {};
+  std::array<Index, kTail + 1> size = {};
   for (std::uint8_t g : group_) ++size[g];
   start_[0] = 0;
   for (int g = 0; g <= kTail; ++g) start_[g + 1] = start_[g] + size[g];
-  std::array<Index, kBlocks + 2> next;
+  std::array<Index, kTail + 1> next;
   for (int g = 0; g <= kTail; ++g) next[g] = start_[g];
   order_.resize(static_cast<std::size_t>(nRows));
   for (Index r = 0; r < nRows; ++r) order_[next[group_[r]]++] = r;

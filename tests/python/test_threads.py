@@ -31,7 +31,7 @@ def test_bench_threads_same_bits(tmp_path):
     assert s['measured']['same_bits'] is True
     assert s['measured']['openmp_threads_at_start'] == 2
     assert s['measured']['cps'] > 2048  # more than one chunk of CPs
-    assert s['measured']['sweep_order'] == 'blocked'
+    assert s['measured']['sweep_order'] == 'sequential'
 
 
 def test_bench_ballistic_same_bits_on_two_threads(tmp_path):
