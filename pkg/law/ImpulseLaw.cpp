@@ -216,9 +216,9 @@ void ImpulseLaw::serialLayout(Index n) {
 // The rows by colour (law/RowColouring: rows of one colour share no node) or by block
 // (law/RowBlocks: rows of two blocks share no node), the body rows last, laid out in that order in
 // rows_ (rowAt(r): row r of the list, which rows_ must not hold): the sweeps then solve each
-// colour's rows at once on the threads (or the blocks at once, each in order), then the tail (the
-// seam and the body rows) one by one. SweepOrder::Sequential: every row in the serial tail, in list
-// order.
+// colour's rows at once on the threads (or each phase's blocks at once, each in order), then the
+// tail (the seam and the body rows) one by one. SweepOrder::Sequential: every row in the serial
+// tail, in list order.
 template <class RowAt>
 void ImpulseLaw::colourRows(const Fabric& f, Index n, SweepOrder order, RowAt&& rowAt) {
   rows_.resize(static_cast<std::size_t>(n));
@@ -291,8 +291,7 @@ Real ImpulseLaw::solveRow(Fabric& f, SweepRow& r) {
 // each writes only its own nodes, so any split gives the same bits), then the serial tail (the
 // rows on a body) in order. Blocked sweeps: the blocks at once, each block's rows in order (blocks
 // share no node), then the cuts' rows in two phases, then the tail (the seam, then the rows on a
-// body) in order. The misses are kept
-// per row; their largest is order-free.
+// body) in order. The misses are kept per row; their largest is order-free.
 // Whether the colours are split over the threads changes no result, only the time: a sweep costs
 // a barrier per colour, and on cores busy with other processes each barrier waits for a thread
 // that is not running (measured, bench_threads at a load of 3-13 on 2 cores: the response phase

@@ -31,7 +31,8 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
   // and moves only its own four nodes, so a colour's contacts are projected at once on the threads
   // with the same bits as one after another. The body contacts (all share the body) follow, in order.
   // SweepOrder::Sequential: every contact in the serial tail, in order. SweepOrder::Blocked: the
-  // blocks of law/RowBlocks at once (they share no node), each in order, then the seam in order.
+  // groups of each phase of law/RowBlocks at once (they share no node), each in order, then the
+  // seam in order.
   const bool blocked = order == SweepOrder::Blocked;
   const auto nodesOf = [&](Index q, Index* node) {
     if (order == SweepOrder::Sequential) return -1;

@@ -8,11 +8,11 @@
 // is what solving the blocks one after another gives. The rows across one cut follow, the even cuts'
 // at once, then the odd cuts' (the rows of cuts c and c + 2 share no node). The rows across two cuts
 // or more (the seam) and the rows on a rigid body (the tail: all of a projectile's rows share it)
-// follow, in row order, on one thread. This is block Gauss-Seidel with the interface last (the domain-decomposition ordering of
-// Gauss-Seidel; Saad, "Iterative Methods for Sparse Linear Systems", 2nd ed., Sec. 12.4 and 14.2),
-// still Gauss-Seidel, in another row order than the list's. Against law/RowColouring it costs three
-// barriers per sweep instead of one per colour, and keeps the list's order (neighbouring rows one
-// after another) inside each block.
+// follow, in row order, on one thread. This is block Gauss-Seidel with the interface last (the
+// domain-decomposition ordering of Gauss-Seidel; Saad, "Iterative Methods for Sparse Linear
+// Systems", 2nd ed., Sec. 12.4 and 14.2), still Gauss-Seidel, in another row order than the list's.
+// Against law/RowColouring it costs three barriers per sweep instead of one per colour, and keeps
+// the list's order (neighbouring rows one after another) inside each block.
 //
 // The blocks are a function of the row list and the node positions alone (kBlocks is fixed, not the
 // thread count): the same order for any thread count.
@@ -39,7 +39,9 @@ class RowBlocks {
   static constexpr int kPhases = 3;
   static constexpr int kSeam = kBlocks + kBlocks - 1, kTail = kSeam + 1;
   /// First group of phase p in [0, kPhases] (phase kPhases: the serial part).
-  static constexpr int phaseBegin(int p) { return p == 0 ? 0 : p == 1 ? kBlocks : p == 2 ? kBlocks + kBlocks / 2 : kSeam; }
+  static constexpr int phaseBegin(int p) {
+    return p == 0 ? 0 : p == 1 ? kBlocks : p == 2 ? kBlocks + kBlocks / 2 : kSeam;
+  }
 
   /// Blocks rows [0, nRows): nodesOf(r, node) writes row r's nodes into node[0..3] and returns how
   /// many (at most 4), or -1 for a row of the tail; pos: the node positions [m].

@@ -313,7 +313,8 @@ TEST(Threads, RowsOfTwoBlocksShareNoNodeOnAStruckPly) {
         Index node[4];
         rowNodes(blocks.order()[k], node);
         for (Index i : node) {
-          EXPECT_TRUE(owner[i] == -1 || owner[i] == g) << "phase " << phase << ": node " << i << " in groups " << owner[i] << " and " << g;
+          EXPECT_TRUE(owner[i] == -1 || owner[i] == g)
+              << "phase " << phase << ": node " << i << " in groups " << owner[i] << " and " << g;
           owner[i] = g;
         }
       }
@@ -353,6 +354,7 @@ TEST(Threads, BlockedAndSequentialSweepsConvergeToTheSameVelocities) {
   EXPECT_EQ(missS, 0);
   EXPECT_EQ(missB, 0);
   Real worst = 0, fastest = 0;
-  for (std::size_t i = 0; i < vS.size(); ++i) worst = std::max(worst, (vS[i] - vB[i]).norm()), fastest = std::max(fastest, vS[i].norm());
+  for (std::size_t i = 0; i < vS.size(); ++i)
+    worst = std::max(worst, (vS[i] - vB[i]).norm()), fastest = std::max(fastest, vS[i].norm());
   EXPECT_LT(worst, 1e-9 * fastest) << "largest difference " << worst << " m/s of " << fastest;
 }
