@@ -90,13 +90,17 @@ Outcome tension(int threads, int steps) {
 // A 40 x 40-yarn ply (one CP per crossing, ~3200 CPs, every yarn end clamped, grid broad phase) and
 // a 3 mm, 1 g cube touching its middle at 1000 m/s; breakage at 1 % raw strain; friction between
 // yarns and with the cube.
-Outcome ballistic(int threads, int steps, BroadPhase broad = BroadPhase::Grid, Real skin = 1e-5,
-                  SweepOrder order = SweepOrder::Coloured) {
-  setThreads(threads);
+WeaveParams struckPly() {
   WeaveParams p = km2_706();
   p.nx = p.ny = 20;
   p.cpPerSpan = 1;
-  FabricEngine e(buildWeave(p).fabric);
+  return p;
+}
+
+Outcome ballistic(int threads, int steps, BroadPhase broad = BroadPhase::Grid, Real skin = 1e-5,
+                  SweepOrder order = SweepOrder::Coloured) {
+  setThreads(threads);
+  FabricEngine e(buildWeave(struckPly()).fabric);
   ContactParams c;
   c.positionCorrection = 0, c.flattenPasses = 1, c.maxIterations = 10, c.skin = skin;
   c.friction = 0.1, c.bodyFriction = 0.2;  // friction's energy share is summed per row, then in row order
@@ -114,6 +118,36 @@ Outcome ballistic(int threads, int steps, BroadPhase broad = BroadPhase::Grid, R
   return o;
 }
 
+
+// The rows' nodes as ImpulseLaw lays them out for a contact list: the two nodes of each CP; the body
+// rows after the yarn rows (-1: the serial tail).
+struct RowNodes {
+  const Fabric& f;
+  const std::vector<CPContact>& cs;
+  int operator()(Index r, Index* node) const {
+    if (r >= static_cast<Index>(cs.size())) return -1;
+    node[0] = f.elem0[cs[r].cpA], node[1] = node[0] + 1, node[2] = f.elem0[cs[r].cpB], node[3] = node[2] + 1;
+    return 4;
+  }
+};
+
+// A layout (RowColouring, RowBlocks) holds every row once, group by group up to lastGroup, each
+// group's rows in row order, groupOf(r) the group row r is laid out in.
+template <class Layout, class GroupOf>
+void expectEveryRowOnceInRowOrder(const Layout& layout, int lastGroup, Index nRows, GroupOf&& groupOf) {
+  std::vector<int> seen(static_cast<std::size_t>(nRows), 0);
+  ASSERT_EQ(static_cast<Index>(layout.order().size()), nRows);
+  for (int g = 0; g <= lastGroup; ++g)
+    for (Index k = layout.begin(g); k < layout.begin(g + 1); ++k) {
+      const Index r = layout.order()[k];
+      ++seen[r];
+      EXPECT_EQ(groupOf(r), g);
+      if (k > layout.begin(g)) {
+        EXPECT_LT(layout.order()[k - 1], r);
+      }
+    }
+  for (Index r = 0; r < nRows; ++r) EXPECT_EQ(seen[r], 1) << "row " << r;
+}
 }  // namespace
 
 TEST(Threads, TensionSceneIsTheSameBitsOnOneTwoAndThreeThreads) {
@@ -166,32 +200,12 @@ TEST(Threads, RowsOfAColourShareNoNodeOnAStruckPly) {
   const Index nNodes = static_cast<Index>(o.pos.size());
   ASSERT_GT(o.bodyContactList.size(), 0u) << "the cube touches the ply";
   ASSERT_GT(cs.size(), 1000u);
-  // The rows' nodes as ImpulseLaw lays them out: the two nodes of each CP.
-  WeaveParams p = km2_706();
-  p.nx = p.ny = 20;
-  p.cpPerSpan = 1;
-  const Fabric f = buildWeave(p).fabric;
+  const Fabric f = buildWeave(struckPly()).fabric;
   ASSERT_EQ(f.nNodes(), nNodes);
-  const auto rowNodes = [&](Index r, Index* node) {
-    if (r >= static_cast<Index>(cs.size())) return -1;
-    node[0] = f.elem0[cs[r].cpA], node[1] = node[0] + 1, node[2] = f.elem0[cs[r].cpB], node[3] = node[2] + 1;
-    return 4;
-  };
+  const RowNodes rowNodes{f, cs};
   RowColouring col;
   col.build(nRows, nNodes, rowNodes);
-  // Every row once, in colour order, each colour's rows in row order.
-  std::vector<int> seen(static_cast<std::size_t>(nRows), 0);
-  ASSERT_EQ(static_cast<Index>(col.order().size()), nRows);
-  for (int c = 0; c <= RowColouring::kColours; ++c)
-    for (Index k = col.begin(c); k < col.begin(c + 1); ++k) {
-      const Index r = col.order()[k];
-      ++seen[r];
-      EXPECT_EQ(col.colour(r), c);
-      if (k > col.begin(c)) {
-        EXPECT_LT(col.order()[k - 1], r);
-      }
-    }
-  for (Index r = 0; r < nRows; ++r) EXPECT_EQ(seen[r], 1) << "row " << r;
+  expectEveryRowOnceInRowOrder(col, RowColouring::kColours, nRows, [&](Index r) { return col.colour(r); });
   for (Index r = static_cast<Index>(cs.size()); r < nRows; ++r) EXPECT_EQ(col.colour(r), RowColouring::kColours);
   // No node twice in a colour; per node, its rows (in row order) with their colours.
   std::vector<std::vector<std::pair<Index, int>>> rowsAt(static_cast<std::size_t>(nNodes));
@@ -281,29 +295,11 @@ TEST(Threads, RowsOfTwoBlocksShareNoNodeOnAStruckPly) {
   const Index nYarn = static_cast<Index>(cs.size()), nRows = nYarn + static_cast<Index>(o.bodyContactList.size());
   ASSERT_GT(o.bodyContactList.size(), 0u) << "the cube touches the ply";
   ASSERT_GT(nYarn, 1000);
-  WeaveParams p = km2_706();
-  p.nx = p.ny = 20;
-  p.cpPerSpan = 1;
-  const Fabric f = buildWeave(p).fabric;
-  const auto rowNodes = [&](Index r, Index* node) {
-    if (r >= nYarn) return -1;
-    node[0] = f.elem0[cs[r].cpA], node[1] = node[0] + 1, node[2] = f.elem0[cs[r].cpB], node[3] = node[2] + 1;
-    return 4;
-  };
+  const Fabric f = buildWeave(struckPly()).fabric;
+  const RowNodes rowNodes{f, cs};
   RowBlocks blocks;
   blocks.build(nRows, o.pos, rowNodes);
-  ASSERT_EQ(static_cast<Index>(blocks.order().size()), nRows);
-  std::vector<int> seen(static_cast<std::size_t>(nRows), 0);
-  for (int g = 0; g <= RowBlocks::kTail; ++g)
-    for (Index k = blocks.begin(g); k < blocks.begin(g + 1); ++k) {
-      const Index r = blocks.order()[k];
-      ++seen[r];
-      EXPECT_EQ(blocks.group(r), g);
-      if (k > blocks.begin(g)) {
-        EXPECT_LT(blocks.order()[k - 1], r);
-      }
-    }
-  for (Index r = 0; r < nRows; ++r) EXPECT_EQ(seen[r], 1) << "row " << r;
+  expectEveryRowOnceInRowOrder(blocks, RowBlocks::kTail, nRows, [&](Index r) { return blocks.group(r); });
   for (Index r = nYarn; r < nRows; ++r) EXPECT_EQ(blocks.group(r), RowBlocks::kTail);
   for (Index r = 0; r < nYarn; ++r) EXPECT_NE(blocks.group(r), RowBlocks::kTail);
   for (int phase = 0; phase < RowBlocks::kPhases; ++phase) {
@@ -334,11 +330,8 @@ TEST(Threads, RowsOfTwoBlocksShareNoNodeOnAStruckPly) {
 // agree to about the tolerance times the rows a node has.
 TEST(Threads, BlockedAndSequentialSweepsConvergeToTheSameVelocities) {
   const Outcome o = ballistic(1, 100, BroadPhase::Grid, 1e-5, SweepOrder::Blocked);
-  WeaveParams wp = km2_706();
-  wp.nx = wp.ny = 20;
-  wp.cpPerSpan = 1;
   const auto solved = [&](SweepOrder order, long& rows, long& unresolved) {
-    Fabric f = buildWeave(wp).fabric;
+    Fabric f = buildWeave(struckPly()).fabric;
     f.pos = o.pos, f.vel = o.vel, f.secFlat = o.flat, f.secDir = o.dir, f.alive = o.alive;
     for (Index i = 0; i < f.nNodes(); ++i) f.vel[i].z() -= 5.0 * (i % 7);  // rows that must push
     ContactParams p;
