@@ -19,46 +19,67 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
                            std::vector<CPPair>& pairs, const std::vector<std::uint8_t>* dirty) {
   pairs.clear();
   const Index n = static_cast<Index>(boxes.size());
+  const int nThreads = threads();
+  // The AABBs and the cell size, the largest live AABB side (a maximum per fixed chunk, then over
+  // the chunks: exact in any order).
+  constexpr Index kChunk = 1024;
+  const Index chunks = chunkCount(n, kChunk);
   lo_.resize(n), hi_.resize(n);
+  chunkSide_.assign(chunks, 0);
+  parallelFor(chunks, 2, nThreads, [&](Index t) {
+    Real side = 0;
+    for (Index i = t * kChunk, end = std::min(n, i + kChunk); i < end; ++i) {
+      const Vec3 half = boxes[i].axes.cwiseAbs() * boxes[i].extent;
+      lo_[i] = boxes[i].centre - half, hi_[i] = boxes[i].centre + half;
+      if (f.alive[i]) side = std::max(side, 2 * half.maxCoeff());
+    }
+    chunkSide_[t] = side;
+  });
   Real h = 0;
-  for (Index i = 0; i < n; ++i) {
-    const Vec3 half = boxes[i].axes.cwiseAbs() * boxes[i].extent;
-    lo_[i] = boxes[i].centre - half, hi_[i] = boxes[i].centre + half;
-    if (f.alive[i]) h = std::max(h, 2 * half.maxCoeff());
-  }
+  for (Real side : chunkSide_) h = std::max(h, side);
   if (!(h > 0) || !std::isfinite(h)) return;
   h *= 1.0000001;  // every AABB then spans at most two cells per axis
   cellSize = h;
   const Real ih = 1 / h;
+  const auto cellRange = [&](Index i, std::int64_t lo[3], std::int64_t hi[3]) {
+    for (int d = 0; d < 3; ++d)
+      lo[d] = static_cast<std::int64_t>(std::floor(lo_[i][d] * ih)), hi[d] = static_cast<std::int64_t>(std::floor(hi_[i][d] * ih));
+  };
 
-  // The cells of each CP.
-  cellOf_.clear();
-  cellBegin_.assign(n + 1, 0);
-  for (Index i = 0; i < n; ++i) {
-    cellBegin_[i] = static_cast<Index>(cellOf_.size());
-    if (!f.alive[i]) continue;
-    const std::int64_t x0 = static_cast<std::int64_t>(std::floor(lo_[i].x() * ih)), x1 = static_cast<std::int64_t>(std::floor(hi_[i].x() * ih));
-    const std::int64_t y0 = static_cast<std::int64_t>(std::floor(lo_[i].y() * ih)), y1 = static_cast<std::int64_t>(std::floor(hi_[i].y() * ih));
-    const std::int64_t z0 = static_cast<std::int64_t>(std::floor(lo_[i].z() * ih)), z1 = static_cast<std::int64_t>(std::floor(hi_[i].z() * ih));
-    for (std::int64_t x = x0; x <= x1; ++x)
-      for (std::int64_t y = y0; y <= y1; ++y)
-        for (std::int64_t z = z0; z <= z1; ++z) cellOf_.push_back({x, y, z});
-  }
-  cellBegin_[n] = static_cast<Index>(cellOf_.size());
-
-  // Hash table of cells: count, prefix sums, scatter (entries of a slot in ascending CP order).
+  // The cells of each CP: counted (threads), their starts, then written with their slots (threads).
+  cellBegin_.resize(n + 1);
+  parallelFor(n, kParallelGrain, nThreads, [&](Index i) {
+    std::int64_t lo[3], hi[3];
+    cellRange(i, lo, hi);
+    cellBegin_[i + 1] = f.alive[i] ? static_cast<Index>((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1)) : 0;
+  });
+  cellBegin_[0] = 0;
+  for (Index i = 0; i < n; ++i) cellBegin_[i + 1] += cellBegin_[i];
+  const std::size_t cells = static_cast<std::size_t>(cellBegin_[n]);
   std::size_t size = 1;
-  while (size < 2 * cellOf_.size()) size <<= 1;
+  while (size < 2 * cells) size <<= 1;
   const std::uint64_t mask = size - 1;
+  cellOf_.resize(cells), cellSlot_.resize(cells);
+  parallelFor(n, kParallelGrain, nThreads, [&](Index i) {
+    if (!f.alive[i]) return;
+    std::int64_t lo[3], hi[3];
+    cellRange(i, lo, hi);
+    Index k = cellBegin_[i];
+    for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+      for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+        for (std::int64_t z = lo[2]; z <= hi[2]; ++z, ++k) cellOf_[k] = {x, y, z}, cellSlot_[k] = static_cast<std::uint32_t>(slotOf(x, y, z, mask));
+  });
+
+  // Hash table of cells: count, prefix sums, scatter in cell order (entries of a slot in ascending
+  // CP order). Serial, on the slots computed above.
   slotCount_.assign(size + 1, 0);
-  for (const Cell& c : cellOf_) ++slotCount_[slotOf(c.x, c.y, c.z, mask) + 1];
+  for (std::uint32_t s : cellSlot_) ++slotCount_[s + 1];
   for (std::size_t s = 0; s < size; ++s) slotCount_[s + 1] += slotCount_[s];
-  slotItem_.resize(cellOf_.size()), slotCell_.resize(cellOf_.size());
+  slotItem_.resize(cells), slotCell_.resize(cells);
   fill_.assign(slotCount_.begin(), slotCount_.end() - 1);
   for (Index i = 0; i < n; ++i)
     for (Index k = cellBegin_[i]; k < cellBegin_[i + 1]; ++k) {
-      const Cell& c = cellOf_[k];
-      const std::uint32_t at = fill_[slotOf(c.x, c.y, c.z, mask)]++;
+      const std::uint32_t at = fill_[cellSlot_[k]]++;
       slotItem_[at] = i, slotCell_[at] = k;
     }
 
@@ -67,11 +88,9 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
   // CP with every CP of its cells, a flagged pair once (from its lower CP): a pair (j, i) with j < i
   // is then listed from i, and the list is sorted at the end.
   const auto flagged = [dirty](Index i) { return !dirty || (*dirty)[i]; };
-  constexpr Index kChunk = 1024;
-  const Index chunks = chunkCount(n, kChunk);
   chunkPairs_.resize(chunks);
   chunkTests_.assign(chunks, 0);
-  parallelForDynamic(chunks, 2, threads(), [&](Index t) {
+  parallelForDynamic(chunks, 2, nThreads, [&](Index t) {
     std::vector<CPPair>& out = chunkPairs_[t];
     out.clear();
     std::vector<Index> mine;
@@ -80,7 +99,7 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
       mine.clear();
       for (Index k = cellBegin_[i]; k < cellBegin_[i + 1]; ++k) {
         const Cell& c = cellOf_[k];
-        const std::uint64_t s = slotOf(c.x, c.y, c.z, mask);
+        const std::uint32_t s = cellSlot_[k];
         for (std::uint32_t at = slotCount_[s]; at < slotCount_[s + 1]; ++at) {
           const Index j = slotItem_[at];
           if (j == i || (j < i && flagged(j))) continue;

@@ -31,7 +31,9 @@ class GridCollider {
   };
   std::vector<Vec3> lo_, hi_;              // AABBs
   std::vector<Cell> cellOf_;               // the cells of each CP: cellBegin_[i] .. cellBegin_[i+1]
+  std::vector<std::uint32_t> cellSlot_;     // the hash slot of each of those cells
   std::vector<Index> cellBegin_;
+  std::vector<Real> chunkSide_;            // largest AABB side of each fixed chunk of CPs
   std::vector<std::uint32_t> slotCount_;   // hash table: entries per slot, then their start
   std::vector<std::uint32_t> fill_;        // next free entry of each slot while scattering
   std::vector<Index> slotItem_, slotCell_;  // per entry: the CP and its cell (index into cellOf_)

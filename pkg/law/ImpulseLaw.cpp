@@ -54,7 +54,9 @@ Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies) {
     b.vel = bodyVel_[k].v, b.angVel = bodyVel_[k].w;
     work += bodyVel_[k].ke0 - b.kineticEnergy();
   }
-  // A kinematic body gives the fabric its impulse times its own velocity at the point.
+  // A kinematic body gives the fabric its impulse times its own velocity at the point (a scan of
+  // every row, made only when there is one).
+  if (std::all_of(bodies->begin(), bodies->end(), [](const RigidBody& b) { return b.dynamic(); })) return work;
   for (const Row& r : rows_)
     if (r.body >= 0 && !(*bodies)[r.body].dynamic()) {
       const BodyVelocity& b = bodyVel_[r.body];
@@ -175,10 +177,19 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     const Real vn = rowVelocity(f, r).dot(r.n);
     miss_[k] = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
   });
-  for (Real miss : miss_) {
-    rep.residual = std::max(rep.residual, miss);
-    rep.unresolved += miss > p.tolerance;
-  }
+  // The largest miss and the rows missing by more than the tolerance, per fixed chunk (a maximum and
+  // a count: exact in any order).
+  struct Misses {
+    Real worst = 0;
+    long over = 0;
+    Misses& operator+=(const Misses& o) { return worst = std::max(worst, o.worst), over += o.over, *this; }
+  };
+  const Misses misses = chunkedSum(static_cast<Index>(miss_.size()), 4096, threads(), Misses{}, [&](Index k0, Index k1) {
+    Misses m;
+    for (Index k = k0; k < k1; ++k) m.worst = std::max(m.worst, miss_[k]), m.over += miss_[k] > p.tolerance;
+    return m;
+  });
+  rep.residual = misses.worst, rep.unresolved = misses.over;
   rep.energyChange = energyChange(f);
   rep.bodyWork = storeBodies(bodies);
 }
@@ -322,11 +333,17 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
     const auto t0 = Clock::now();
     // Blocks, then the rows across the even cuts, then the odd cuts': the groups of a phase each on
     // a thread, its rows in order (law/RowBlocks).
+    // Each group's largest miss kept by its thread (a maximum: the same in any order).
+    Real groupWorst[RowBlocks::kSeam] = {};
     for (int phase = 0; blocks_ > 0 && phase < RowBlocks::kPhases; ++phase) {
       const int g0 = RowBlocks::phaseBegin(phase);
       parallelFor(RowBlocks::phaseBegin(phase + 1) - g0, 1, split ? nThreads : 1, [&](Index q) {
-        for (Index k = start_[g0 + q]; k < start_[g0 + q + 1]; ++k)
+        Real worst = 0;
+        for (Index k = start_[g0 + q]; k < start_[g0 + q + 1]; ++k) {
           miss_[k] = packed ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
+          worst = std::max(worst, miss_[k]);
+        }
+        groupWorst[g0 + q] = worst;
       });
     }
     for (int c = 0; c < colours; ++c) {
@@ -341,7 +358,10 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
     if (it < 2) seconds[it] = std::chrono::duration<double>(Clock::now() - t0).count();
     const Index tail = start_[RowColouring::kColours];
     Real worst = 0;
-    for (Index k = 0; k < tail; ++k) worst = std::max(worst, miss_[k]);
+    if (blocks_ > 0)
+      for (Real w : groupWorst) worst = std::max(worst, w);
+    else
+      for (Index k = 0; k < tail; ++k) worst = std::max(worst, miss_[k]);  // the colours' rows
     for (Index k = tail; k < nRows; ++k) {
       miss_[k] = packed && !packed_[k].body ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
       worst = std::max(worst, miss_[k]);
