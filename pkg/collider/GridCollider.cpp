@@ -59,7 +59,7 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
   std::size_t size = 1;
   while (size < 2 * cells) size <<= 1;
   const std::uint64_t mask = size - 1;
-  cellOf_.resize(cells), cellSlot_.resize(cells);
+  cellOf_.resize(cells), cellSlot_.resize(cells), cellCP_.resize(cells);
   parallelFor(n, kParallelGrain, nThreads, [&](Index i) {
     if (!f.alive[i]) return;
     std::int64_t lo[3], hi[3];
@@ -67,21 +67,47 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
     Index k = cellBegin_[i];
     for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
       for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-        for (std::int64_t z = lo[2]; z <= hi[2]; ++z, ++k) cellOf_[k] = {x, y, z}, cellSlot_[k] = static_cast<std::uint32_t>(slotOf(x, y, z, mask));
+        for (std::int64_t z = lo[2]; z <= hi[2]; ++z, ++k) {
+          cellOf_[k] = {x, y, z}, cellCP_[k] = i;
+          cellSlot_[k] = static_cast<std::uint32_t>(slotOf(x, y, z, mask));
+        }
   });
 
   // Hash table of cells: count, prefix sums, scatter in cell order (entries of a slot in ascending
-  // CP order). Serial, on the slots computed above.
-  slotCount_.assign(size + 1, 0);
-  for (std::uint32_t s : cellSlot_) ++slotCount_[s + 1];
-  for (std::size_t s = 0; s < size; ++s) slotCount_[s + 1] += slotCount_[s];
+  // CP order: a stable counting sort of the cells by slot). The slots are split into ranges, one per
+  // thread; each thread reads every cell and writes only the slots of its range and their entries,
+  // so any split gives the same table.
+  const int parts = nThreads;
+  slotCount_.resize(size + 1);
+  fill_.resize(size);
+  partTotal_.resize(static_cast<std::size_t>(parts) + 1);
+  const auto range = [&](Index p, std::size_t& s0, std::size_t& s1) { s0 = size * p / parts, s1 = size * (p + 1) / parts; };
+  slotCount_[0] = 0;
+  parallelFor(parts, 1, nThreads, [&](Index p) {
+    std::size_t s0, s1;
+    range(p, s0, s1);
+    std::fill(slotCount_.begin() + s0 + 1, slotCount_.begin() + s1 + 1, 0);
+    for (std::uint32_t s : cellSlot_)
+      if (s >= s0 && s < s1) ++slotCount_[s + 1];
+    for (std::size_t s = s0 + 1; s < s1; ++s) slotCount_[s + 1] += slotCount_[s];  // within the range
+    partTotal_[p + 1] = s1 > s0 ? slotCount_[s1] : 0;
+  });
+  partTotal_[0] = 0;
+  for (int p = 0; p < parts; ++p) partTotal_[p + 1] += partTotal_[p];
   slotItem_.resize(cells), slotCell_.resize(cells);
-  fill_.assign(slotCount_.begin(), slotCount_.end() - 1);
-  for (Index i = 0; i < n; ++i)
-    for (Index k = cellBegin_[i]; k < cellBegin_[i + 1]; ++k) {
-      const std::uint32_t at = fill_[cellSlot_[k]]++;
-      slotItem_[at] = i, slotCell_[at] = k;
-    }
+  parallelFor(parts, 1, nThreads, [&](Index p) {
+    std::size_t s0, s1;
+    range(p, s0, s1);
+    const std::uint32_t offset = partTotal_[p];
+    for (std::size_t s = s0; s < s1; ++s) slotCount_[s + 1] += offset;
+    if (s1 > s0) fill_[s0] = offset;
+    for (std::size_t s = s0 + 1; s < s1; ++s) fill_[s] = slotCount_[s];
+    for (std::size_t k = 0; k < cells; ++k)
+      if (const std::uint32_t s = cellSlot_[k]; s >= s0 && s < s1) {
+        const std::uint32_t at = fill_[s]++;
+        slotItem_[at] = cellCP_[k], slotCell_[at] = static_cast<Index>(k);
+      }
+  });
 
   // Each CP with the later CPs of its cells: fixed chunks of CPs (threads), each listing its pairs in
   // CP order, joined in chunk order (the same list at any thread count). With `dirty`, each flagged
@@ -126,10 +152,8 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
       for (Index j : mine) out.push_back({std::min(i, j), std::max(i, j)});
     }
   });
-  for (Index t = 0; t < chunks; ++t) {
-    pairs.insert(pairs.end(), chunkPairs_[t].begin(), chunkPairs_[t].end());
-    overlapTests += chunkTests_[t];
-  }
+  joinChunks(chunkPairs_, pairs, nThreads);
+  for (Index t = 0; t < chunks; ++t) overlapTests += chunkTests_[t];
   if (dirty) std::sort(pairs.begin(), pairs.end());
 }
 

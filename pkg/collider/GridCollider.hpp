@@ -32,10 +32,12 @@ class GridCollider {
   std::vector<Vec3> lo_, hi_;              // AABBs
   std::vector<Cell> cellOf_;               // the cells of each CP: cellBegin_[i] .. cellBegin_[i+1]
   std::vector<std::uint32_t> cellSlot_;     // the hash slot of each of those cells
+  std::vector<Index> cellCP_;               // and its CP
   std::vector<Index> cellBegin_;
   std::vector<Real> chunkSide_;            // largest AABB side of each fixed chunk of CPs
   std::vector<std::uint32_t> slotCount_;   // hash table: entries per slot, then their start
   std::vector<std::uint32_t> fill_;        // next free entry of each slot while scattering
+  std::vector<std::uint32_t> partTotal_;   // entries before each thread's range of slots
   std::vector<Index> slotItem_, slotCell_;  // per entry: the CP and its cell (index into cellOf_)
   std::vector<std::vector<CPPair>> chunkPairs_;  // pairs of each fixed chunk of CPs
   std::vector<long> chunkTests_;                 // OBB tests of each chunk

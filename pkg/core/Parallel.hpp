@@ -8,6 +8,7 @@
 // Without OpenMP everything runs on the calling thread and gives the same bits.
 #pragma once
 #include "core/Types.hpp"
+#include <algorithm>
 #include <vector>
 #ifdef _OPENMP
 #include <omp.h>
@@ -125,6 +126,42 @@ inline T chunkedSum(Index n, Index chunk, int nThreads, const T& zero, Body&& bo
   T sum = zero;
   for (const T& p : part) sum += p;
   return sum;
+}
+
+/// Lists made per fixed chunk joined in chunk order into `out` (the same list at any thread count),
+/// each chunk copied to its place on the threads (a serial copy of a step's pairs or contacts held
+/// the other threads idle).
+template <class T>
+inline void joinChunks(const std::vector<std::vector<T>>& parts, std::vector<T>& out, int nThreads) {
+  const Index n = static_cast<Index>(parts.size());
+  std::vector<std::size_t> start(parts.size() + 1, 0);
+  for (Index t = 0; t < n; ++t) start[t + 1] = start[t] + parts[t].size();
+  out.resize(start[n]);
+  parallelFor(n, 2, nThreads, [&](Index t) { std::copy(parts[t].begin(), parts[t].end(), out.begin() + start[t]); });
+}
+
+/// std::merge of the sorted lists a and b into out, on the threads: fixed chunks of a, each merged
+/// with the part of b that std::merge puts before the next chunk (the elements below the chunk's
+/// first, an element of a before an equal one of b), written at its place. The same list as
+/// std::merge at any thread count.
+template <class T>
+inline void parallelMerge(const std::vector<T>& a, const std::vector<T>& b, std::vector<T>& out, int nThreads) {
+  constexpr Index kChunk = 8192;
+  out.resize(a.size() + b.size());
+  const Index na = static_cast<Index>(a.size());
+  const Index chunks = std::max<Index>(1, chunkCount(na, kChunk));
+  // b's part of chunk t starts where b reaches a's first element of the chunk (all of b from 0 for the
+  // first chunk, to its end for the last)
+  const auto bStart = [&](Index t) {
+    if (t == 0) return b.begin();
+    if (t >= chunks) return b.end();
+    return std::lower_bound(b.begin(), b.end(), a[t * kChunk]);
+  };
+  parallelFor(chunks, 2, nThreads, [&](Index t) {
+    const Index a0 = std::min(na, t * kChunk), a1 = std::min(na, (t + 1) * kChunk);
+    const auto b0 = bStart(t), b1 = bStart(t + 1);
+    std::merge(a.begin() + a0, a.begin() + a1, b0, b1, out.begin() + (a0 + (b0 - b.begin())));
+  });
 }
 
 }  // namespace woven

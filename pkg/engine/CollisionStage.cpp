@@ -147,13 +147,21 @@ void CollisionStage::broad(const Fabric& f) {
           skinBoxes_[e] = grown_[e];
           skinBoxes_[e].extent.array() += params_.skin;
         }
-      keptPairs_.clear();
-      for (const CPPair& q : pairs_)
-        if (!renewed(q.a) && !renewed(q.b)) keptPairs_.push_back(q);
+      // The pairs between two CPs kept, by fixed chunks (threads) joined in order; merged with the
+      // fresh ones (both sorted) on the threads.
+      constexpr Index kChunk = 8192;
+      const Index n = static_cast<Index>(pairs_.size());
+      keptChunks_.resize(chunkCount(n, kChunk));
+      parallelFor(static_cast<Index>(keptChunks_.size()), 2, threads(), [&](Index t) {
+        std::vector<CPPair>& out = keptChunks_[t];
+        out.clear();
+        for (Index k = t * kChunk, end = std::min(n, k + kChunk); k < end; ++k)
+          if (!renewed(pairs_[k].a) && !renewed(pairs_[k].b)) out.push_back(pairs_[k]);
+      });
+      joinChunks(keptChunks_, keptPairs_, threads());
       if (byYarn) tree.collide(f, skinBoxes_, filter_, freshPairs_, &dirtyYarn_);
       else grid.collide(f, skinBoxes_, filter_, freshPairs_, &outside_);
-      pairs_.clear();
-      std::merge(keptPairs_.begin(), keptPairs_.end(), freshPairs_.begin(), freshPairs_.end(), std::back_inserter(pairs_));
+      parallelMerge(keptPairs_, freshPairs_, pairs_, threads());
       pairsChanged_ = true;
       ++stats.broadPhases;
       ++stats.partialBroadPhases;
@@ -350,18 +358,9 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         out.push_back(c);
     }
   });
-  // Joined in chunk order, each chunk copied to its place on the threads (a serial copy of some 4 MB
-  // a step held the second thread idle).
-  sliceStart_.resize(chunks + 1);
-  sliceStart_[0] = 0;
+  joinChunks(slices_, contacts_, threads());
   stats.cached = 0;
-  for (Index t = 0; t < chunks; ++t) {
-    sliceStart_[t + 1] = sliceStart_[t] + slices_[t].size();
-    stats.cached += reused_[t];
-  }
-  contacts_.resize(sliceStart_[chunks]);
-  parallelFor(chunks, 2, threads(),
-              [&](Index t) { std::copy(slices_[t].begin(), slices_[t].end(), contacts_.begin() + sliceStart_[t]); });
+  for (Index t = 0; t < chunks; ++t) stats.cached += reused_[t];
 }
 
 void CollisionStage::narrowBodies(const Fabric& f, Real dt) {

@@ -231,10 +231,10 @@ class CollisionStage : public StepHook {
   Real frictionWork_ = 0;  // the impulses' tangential parts took since the last take [J]
   std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per chunk of pairs
   std::vector<long> reused_;                    // carried contacts per chunk of pairs
-  std::vector<std::size_t> sliceStart_;         // where each chunk's contacts start in contacts_
   std::vector<Real> capacity_;                  // flatten: both CPs' flattening capacity per contact [m]
   std::vector<std::uint8_t> dirty_, dirtyYarn_, outside_;
   std::vector<CPPair> keptPairs_, freshPairs_, cachePairs_;
+  std::vector<std::vector<CPPair>> keptChunks_;  // the kept pairs of each fixed chunk (broad)
   std::vector<PairCache> cache_, cacheOld_;  // model Paper with a contact cache
   std::vector<PairMemo> memo_, memoOld_;     // model Gap
   std::vector<long> sectionStamp_;  // per CP: narrow phase in which its sections last changed

@@ -124,6 +124,14 @@ TEST(Collider, TreeSweepAndPruneGridAndBruteForceGiveTheSamePairs) {
     EXPECT_EQ(tree, brute) << "trial " << trial;
     EXPECT_EQ(sap, brute) << "trial " << trial;
     EXPECT_EQ(grid, brute) << "trial " << trial;
+    // The grid's hash table is split among the threads by slot ranges: the same pairs on any count.
+    for (const int nThreads : {1, 2, 3}) {
+      setThreads(nThreads);
+      std::vector<CPPair> again;
+      cs.candidatePairs(f, BroadPhase::Grid, again);
+      EXPECT_EQ(again, brute) << "trial " << trial << ", " << nThreads << " threads";
+    }
+    setThreads(0);
     // The grid's partial phase (CollisionStage::broad: only the CPs out of their skin boxes look):
     // exactly the brute-force pairs with a flagged CP, a few flagged or most.
     for (const Real share : {0.05, 0.7}) {

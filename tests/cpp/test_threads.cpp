@@ -13,6 +13,8 @@
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <cstring>
+#include <iterator>
+#include <random>
 
 using namespace woven;
 using namespace woven_test;
@@ -352,4 +354,42 @@ TEST(Threads, BlockedAndSequentialSweepsConvergeToTheSameVelocities) {
   for (std::size_t i = 0; i < vS.size(); ++i)
     worst = std::max(worst, (vS[i] - vB[i]).norm()), fastest = std::max(fastest, vS[i].norm());
   EXPECT_LT(worst, 1e-8 * fastest) << "largest difference " << worst << " m/s of " << fastest;
+}
+
+// The lists the broad phase joins and merges on the threads (core/Parallel.hpp) against the serial
+// oracle, std::merge and concatenation: lists over several chunks, with equal elements across the
+// two lists and at the chunks' edges, an empty list on either side, on 1, 2 and 3 threads.
+TEST(Threads, ParallelMergeAndJoinGiveTheSerialLists) {
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> small(0, 3000);
+  for (const auto sizes : {std::pair<int, int>{20000, 7000}, {0, 5000}, {30000, 0}, {8192, 8193}}) {
+    // Pairs keyed on a only (b tells the copies apart): std::merge's order of equal keys is tested.
+    std::vector<std::pair<int, int>> a(sizes.first), b(sizes.second);
+    for (auto& x : a) x = {small(rng), 0};
+    for (auto& x : b) x = {small(rng), 1};
+    const auto byKey = [](const std::pair<int, int>& x, const std::pair<int, int>& y) { return x.first < y.first; };
+    std::stable_sort(a.begin(), a.end(), byKey), std::stable_sort(b.begin(), b.end(), byKey);
+    std::vector<std::pair<int, int>> serial;
+    std::merge(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(serial), byKey);
+    std::vector<std::vector<int>> parts(7);
+    std::vector<int> joined;
+    for (auto& part : parts)
+      for (int k = 0, m = small(rng) % 5 == 0 ? 0 : small(rng); k < m; ++k) part.push_back(k), joined.push_back(k);
+    struct Key {  // the pair ordered by its key alone, as parallelMerge compares with <
+      std::pair<int, int> v;
+      bool operator<(const Key& o) const { return v.first < o.v.first; }
+    };
+    std::vector<Key> ka, kb;
+    for (const auto& x : a) ka.push_back({x});
+    for (const auto& x : b) kb.push_back({x});
+    for (const int nThreads : {1, 2, 3}) {
+      std::vector<Key> merged;
+      parallelMerge(ka, kb, merged, nThreads);
+      ASSERT_EQ(merged.size(), serial.size());
+      for (std::size_t k = 0; k < serial.size(); ++k) ASSERT_EQ(merged[k].v, serial[k]) << nThreads << " threads, item " << k;
+      std::vector<int> out;
+      joinChunks(parts, out, nThreads);
+      EXPECT_EQ(out, joined) << nThreads << " threads";
+    }
+  }
 }
