@@ -36,11 +36,11 @@ def test_bench_threads_same_bits(tmp_path):
 
 def test_bench_ballistic_same_bits_on_two_threads(tmp_path):
     # The struck ply (impulse rows on the projectile, blocked sweeps, position projection) on 1 and 2
-    # threads in one process: the same bits; a thread count or sweep order out of range is refused,
-    # naming the key.
+    # threads in one process, twice each: the same bits in all four runs; a thread count, repeat count
+    # or sweep order out of range is refused, naming the key.
     script = os.path.join(ROOT, 'scripts', 'bench_ballistic.py')
     cmd = ['yade', '-j', '2', '-n', '-x', script, 'out=%s' % tmp_path, 'side=0.0254', 't_end=5e-6', 'chain_steps=20',
-           'threads=2']
+           'threads=2', 'repeats=2']
     r = subprocess.run(cmd, cwd=str(tmp_path), capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stdout + r.stderr
     import json
@@ -48,9 +48,14 @@ def test_bench_ballistic_same_bits_on_two_threads(tmp_path):
     assert s['measured']['same_bits'] is True and s['status'] == 'ok'
     assert s['measured']['cps'] > 2048 and s['measured']['speedup'] > 0
     assert s['measured']['sweep_order'] == 'blocked'  # the default with threads >= 2
+    assert len(s['measured']['speedup_each']) == 2 and len(s['measured']['wall_seconds_n_threads_each']) == 2
+    assert s['measured']['wall_seconds_n_threads'] == min(s['measured']['wall_seconds_n_threads_each'])
     bad = subprocess.run(['yade', '-n', '-x', script, 'out=%s' % tmp_path, 'threads=0'], cwd=str(tmp_path),
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode != 0 and 'threads = 0 is invalid' in bad.stdout + bad.stderr
+    bad = subprocess.run(['yade', '-n', '-x', script, 'out=%s' % tmp_path, 'repeats=11'], cwd=str(tmp_path),
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode != 0 and 'repeats = 11 is invalid' in bad.stdout + bad.stderr
     bad = subprocess.run(['yade', '-n', '-x', script, 'out=%s' % tmp_path, 'sweep_order=red-black'], cwd=str(tmp_path),
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode != 0 and "sweep_order = 'red-black' is invalid" in bad.stdout + bad.stderr
