@@ -5,6 +5,7 @@
 #include <boost/python/stl_iterator.hpp>
 #include "core/Errors.hpp"
 #include "core/Parallel.hpp"
+#include "core/ThreadCeiling.hpp"
 #include "engine/FabricEngine.hpp"
 #include "engine/Snapshot.hpp"
 #include "geom/SeparatingAxis.hpp"
@@ -487,6 +488,14 @@ BOOST_PYTHON_MODULE(_woven) {
           "Ends the calling thread's idle OpenMP team (woven.attach does it: the script's thread hands the "
           "stepping to YADE's loop thread). While a team idles in another thread, libgomp makes every team's "
           "threads sleep at each barrier, and two threads gain little (docs/design.md, Threads). True when done.");
+  bp::def("ideal_loop_seconds", +[](int n, int rounds) {
+            require(n >= 1 && n <= 1024, "threads", n, "[1, 1024]");
+            require(rounds >= 1 && rounds <= 100000, "rounds", rounds, "[1, 100000]");
+            return idealLoopSeconds(n, rounds);
+          },
+          (bp::arg("threads"), bp::arg("rounds") = 200),
+          "Wall time [s] of an ideal parallel loop (independent arithmetic, no serial part) on `threads` "
+          "threads, `rounds` regions: what the cores give, for the benchmarks' speed-ups (core/ThreadCeiling.hpp).");
   bp::def("openmp_threads", +[]() { return openmpThreads(); },
           "OpenMP's count in the calling thread (omp_get_max_threads; 1 without OpenMP).");
 

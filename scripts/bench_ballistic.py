@@ -9,7 +9,9 @@
 # 3. threads = N >= 2 (run with yade -j N): the coupled scene once more on N threads in this process
 #    (woven.set_threads), its speed-up over step 2 and whether both runs end in the same bits
 #    (fabric positions and velocities, energy books, projectile); a difference fails the run. With
-#    repeats = R the pair of runs is made R times, alternating, and the fastest of each count kept. Both
+#    repeats = R the pair of runs is made R times, alternating, and the fastest of each count kept;
+#    beside each pair an ideal loop (no serial part: woven.ideal_loop_seconds) on 1 and N threads
+#    shows what the machine's cores give (on this shared machine well under N). Both
 #    coupled runs then sweep the rows in `sweep_order` (default 'blocked': slabs of the ply at once on
 #    the threads; 'coloured': colour by colour), not the scene's serial 'sequential'.
 # Prints the figures, the ratio to the baseline and to issue 12's goals (100 us in 3 s; a coupled
@@ -118,8 +120,12 @@ def coupled(threads):
 
 
 # One thread, then (threads >= 2) N threads, `repeats` times; the fastest run of each count is kept.
-runs1, runsN = [], []
+# Beside each pair, the machine's own ceiling: an ideal loop (no serial part) on 1 and N threads
+# (core/ThreadCeiling.hpp); on this shared machine it gives well under N.
+runs1, runsN, ideal1, idealN = [], [], [], []
 for _ in range(p.repeats):
+    if p.threads > 1:
+        ideal1.append(woven.ideal_loop_seconds(1)), idealN.append(woven.ideal_loop_seconds(p.threads))
     runs1.append(coupled(1))
     if p.threads > 1:
         runsN.append(coupled(p.threads))
@@ -141,7 +147,9 @@ if p.threads > 1:
     measured.update({'threads': p.threads, 'wall_seconds_n_threads': wall_n, 'phase_seconds_n_threads': phases_n,
                      'speedup': wall / wall_n, 'same_bits': bool(same),
                      'wall_seconds_each': [r[2] for r in runs1], 'wall_seconds_n_threads_each': [r[2] for r in runsN],
-                     'speedup_each': [a[2] / b[2] for a, b in zip(runs1, runsN)]})
+                     'speedup_each': [a[2] / b[2] for a, b in zip(runs1, runsN)],
+                     'ideal_loop_speedup': min(ideal1) / min(idealN),
+                     'ideal_loop_speedup_each': [a / b for a, b in zip(ideal1, idealN)]})
     checks['same_bits'] = {'value': bool(same), 'limit': True, 'passed': bool(same),
                            'what': 'positions, velocities, energy books and projectile equal bit for bit on 1 and N threads, '
                                    'in every repeat'}
@@ -161,6 +169,8 @@ if p.threads > 1:
     print('  %d threads: %.1f s (%s): %.2fx one thread (best of %d each; per repeat %s); same bits: %s' %
           (p.threads, wall_n, ', '.join('%s %.1f s' % kv for kv in phases_n.items()), wall / wall_n, p.repeats,
            ', '.join('%.2fx' % x for x in measured['speedup_each']), same))
+    print('  the machine: an ideal loop on %d threads %.2fx one thread (per repeat %s)' %
+          (p.threads, measured['ideal_loop_speedup'], ', '.join('%.2fx' % x for x in measured['ideal_loop_speedup_each'])))
 if status != 'ok':
     import sys
     sys.exit(1)

@@ -10,6 +10,8 @@
 # measured. Both runs sweep the rows in `sweep_order` (default tension.py's 'sequential': here the
 # sweeps are a few percent of a step, and 'blocked' gained nothing on two threads). Prints the times, the speed-up (best and each repeat) against the goal (1.8x on 2 cores),
 # and checks that the runs end in the same bits (positions, velocities, sections, energy books).
+# Beside each pair an ideal loop (no serial part: woven.ideal_loop_seconds) on 1 and N threads shows
+# what the machine's cores give.
 # Writes out/bench_threads/summary.json. Other processes on the machine make the speed-up smaller.
 import time
 
@@ -66,8 +68,10 @@ def run(threads):
     return wall, state, phases, e.n_elements, s['contacts']
 
 
-times1, timesN, same = [], [], True
+times1, timesN, ideal1, idealN, same = [], [], [], [], True
 for r in range(p.repeats):
+    # the machine's own ceiling beside each pair: an ideal loop (no serial part) on 1 and N threads
+    ideal1.append(woven.ideal_loop_seconds(1)), idealN.append(woven.ideal_loop_seconds(p.threads))
     w1, s1, ph1, cps, contacts = run(1)
     wN, sN, phN, _, _ = run(p.threads)
     times1.append(w1), timesN.append(wN)
@@ -79,7 +83,8 @@ ratios = [a / b for a, b in zip(times1, timesN)]
 best = min(times1) / min(timesN)
 measured = {'cps': cps, 'contacts_end': contacts, 'steps': p.steps, 'seconds_1_thread': times1,
             'seconds_n_threads': timesN, 'speedup_per_repeat': ratios, 'speedup_best': best,
-            'same_bits': bool(same), 'openmp_threads_at_start': woven.openmp_threads(), 'sweep_order': p.sweep_order}
+            'same_bits': bool(same), 'openmp_threads_at_start': woven.openmp_threads(), 'sweep_order': p.sweep_order,
+            'ideal_loop_speedup': min(ideal1) / min(idealN), 'ideal_loop_speedup_per_repeat': [a / b for a, b in zip(ideal1, idealN)]}
 checks = {'same_bits': {'value': bool(same), 'limit': True, 'passed': bool(same),
                         'what': 'positions, velocities, sections and energy books equal bit for bit on 1 and N threads'}}
 status = 'ok' if same else 'failed'
@@ -89,6 +94,8 @@ print('bench_threads: %d CPs (%d x %d repeats), %d steps: 1 thread %s s, %d thre
       '(each: %s), goal %.1fx on 2 cores; same bits: %s'
       % (cps, p.nx, p.ny, p.steps, ', '.join('%.2f' % t for t in times1), p.threads,
          ', '.join('%.2f' % t for t in timesN), best, ', '.join('%.2f' % r for r in ratios), p.goal, same))
+print('bench_threads: the machine: an ideal loop on %d threads %.2fx one thread (each: %s)'
+      % (p.threads, measured['ideal_loop_speedup'], ', '.join('%.2f' % x for x in measured['ideal_loop_speedup_per_repeat'])))
 if status != 'ok':
     import sys
     sys.exit(1)

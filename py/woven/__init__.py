@@ -37,7 +37,7 @@ from . import _args  # noqa: E402
 _args.install(_woven)  # argument errors name the argument (before anything is imported from _woven)
 from ._woven import (FabricEngine, Fabric, Pattern, YarnMaterial, YarnSection, WeaveParams,  # noqa: E402,F401
                      InstabilityError, peirce_from_height, peirce_from_crimp, obb_contact, obb_first_contact,
-                     set_threads, threads, openmp_threads, release_threads)
+                     set_threads, threads, openmp_threads, release_threads, ideal_loop_seconds)
 from .weave import weave, pattern, WEAVE_KEYS  # noqa: E402,F401
 from .engine import attach  # noqa: E402,F401
 from . import checkpoint  # noqa: E402

@@ -30,6 +30,7 @@ def test_bench_threads_same_bits(tmp_path):
     s = json.load(open(os.path.join(str(tmp_path), 'summary.json')))
     assert s['measured']['same_bits'] is True
     assert s['measured']['openmp_threads_at_start'] == 2
+    assert s['measured']['ideal_loop_speedup'] > 0  # the machine's ceiling, printed beside the speed-up
     assert s['measured']['cps'] > 2048  # more than one chunk of CPs
     assert s['measured']['sweep_order'] == 'sequential'
 
@@ -50,6 +51,7 @@ def test_bench_ballistic_same_bits_on_two_threads(tmp_path):
     assert s['measured']['sweep_order'] == 'blocked'  # the default with threads >= 2
     assert len(s['measured']['speedup_each']) == 2 and len(s['measured']['wall_seconds_n_threads_each']) == 2
     assert s['measured']['wall_seconds_n_threads'] == min(s['measured']['wall_seconds_n_threads_each'])
+    assert len(s['measured']['ideal_loop_speedup_each']) == 2
     bad = subprocess.run(['yade', '-n', '-x', script, 'out=%s' % tmp_path, 'threads=0'], cwd=str(tmp_path),
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode != 0 and 'threads = 0 is invalid' in bad.stdout + bad.stderr
