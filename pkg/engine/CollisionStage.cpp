@@ -31,6 +31,11 @@ inline bool lockedCP(const Fabric& f, Index e, Real mcd) {
 // A body contact's key: its CP, body, part and end (BodyContact::end; -1: the sphere's own place,
 // or a box or cylinder contact). Only a contact of the same key is its memory: a sphere's contact
 // held at an end node measures that node's section, not the section at the centre's place.
+// A maximum carried as a sum (chunkedSum): the largest of the chunks' largest, exact in any order.
+struct DeepestOf {
+  Real value = 0;
+  DeepestOf& operator+=(const DeepestOf& o) { return value = std::max(value, o.value), *this; }
+};
 inline std::uint64_t bodyKey(Index cp, int body, int part, int end) {
   return (static_cast<std::uint64_t>(cp) << 32) | (static_cast<std::uint64_t>(body & 0x3fff) << 18) |
          (static_cast<std::uint64_t>(part & 0xffff) << 2) | static_cast<std::uint64_t>(end + 1);
@@ -422,18 +427,28 @@ int CollisionStage::flatten(Fabric& f, int maxPasses, Real bodyDt) {
     // is still circular (secFlat 0) turn freely: a node circular at the pass start and flattened by an
     // earlier contact of this pass changes that, so those CPs are measured again in the loop (the
     // serial order's result, the same bits at any thread count).
+    // The contacts that can flatten (overlapping, not both locked at the pass start: capacity 0
+    // leaves them to the impulses) listed by fixed chunks, in order.
     const Index nc = static_cast<Index>(contacts_.size());
     capacity_.resize(2 * contacts_.size());
-    parallelFor(nc, 256, threads(), [&](Index k) {
-      const CPContact& c = contacts_[k];
-      if (c.time > 0 || !(c.gap < -tiny)) return;
-      if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) return;  // the loop below skips it
-      capacity_[2 * k] = capacityOne(f, c, false, &flatBefore_);
-      capacity_[2 * k + 1] = capacityOne(f, c, true, &flatBefore_);
+    constexpr Index kChunk = 4096;
+    flattenChunks_.resize(chunkCount(nc, kChunk));
+    parallelFor(static_cast<Index>(flattenChunks_.size()), 2, threads(), [&](Index t) {
+      std::vector<Index>& mine = flattenChunks_[t];
+      mine.clear();
+      for (Index k = t * kChunk, end = std::min(nc, k + kChunk); k < end; ++k) {
+        const CPContact& c = contacts_[k];
+        if (c.time > 0 || !(c.gap < -tiny)) continue;
+        if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) continue;
+        capacity_[2 * k] = capacityOne(f, c, false, &flatBefore_);
+        capacity_[2 * k + 1] = capacityOne(f, c, true, &flatBefore_);
+        mine.push_back(k);
+      }
     });
-    for (Index k = 0; k < nc; ++k) {
+    joinChunks(flattenChunks_, flattenList_, threads());
+    for (const Index k : flattenList_) {
       const CPContact& c = contacts_[k];
-      if (c.time > 0 || !(c.gap < -tiny)) continue;
+      // locked since the pass started, by an earlier contact of this loop
       if (lockedCP(f, c.cpA, params_.mcd) && lockedCP(f, c.cpB, params_.mcd)) continue;  // capacity 0: left to the impulses
       const Real need = c.hHeld - c.gap;  // the capped measure gives only past what the cap holds
       const auto turnedThisPass = [&](Index e) {
@@ -579,22 +594,41 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt, Real horizon) {
 
   stats.candidates = static_cast<long>(pairs_.size());
   stats.contacts = static_cast<long>(contacts_.size());
-  stats.moving = 0;
-  for (const CPContact& c : contacts_) stats.moving += c.time > 0;
   stats.flattened = 0;
   stats.flattenPasses = flattens ? flatten(f, params_.flattenPasses, horizon) : 0;
   checkOverlaps(f, dt);
   // Overlap after flattening and the check (what none of flattening, the last projection and the
   // check removed): its largest and mean values over the contacts in overlap, and sums for the
   // mean over time.
+  // Per fixed chunk (threads): the deepest (the first of equals) and the moving count; the overlaps
+  // listed and summed in contact order (the serial sum's bits).
+  constexpr Index kChunk = 4096;
+  const Index nc = static_cast<Index>(contacts_.size());
+  overlapChunks_.resize(chunkCount(nc, kChunk));
+  scanChunks_.resize(overlapChunks_.size());
+  parallelFor(static_cast<Index>(overlapChunks_.size()), 2, threads(), [&](Index t) {
+    OverlapScan& q = scanChunks_[t];
+    q = OverlapScan{};
+    overlapChunks_[t].clear();
+    for (Index k = t * kChunk, end = std::min(nc, k + kChunk); k < end; ++k) {
+      const CPContact& c = contacts_[k];
+      if (-c.gap > q.deepest) q.deepest = -c.gap, q.at = k;
+      if (c.gap < 0) overlapChunks_[t].push_back(c.gap);
+      q.moving += c.time > 0;
+    }
+  });
   stats.penetration = 0;
-  Real sum = 0;
-  long count = 0;
   stats.deepestA = stats.deepestB = -1;
-  for (const CPContact& c : contacts_) {
-    if (-c.gap > stats.penetration) stats.penetration = -c.gap, stats.deepestA = c.cpA, stats.deepestB = c.cpB;
-    if (c.gap < 0) sum -= c.gap, ++count;
+  stats.moving = 0;
+  for (const OverlapScan& q : scanChunks_) {
+    if (q.deepest > stats.penetration)
+      stats.penetration = q.deepest, stats.deepestA = contacts_[q.at].cpA, stats.deepestB = contacts_[q.at].cpB;
+    stats.moving += q.moving;
   }
+  joinChunks(overlapChunks_, overlapGaps_, threads());
+  Real sum = 0;
+  for (const Real gap : overlapGaps_) sum -= gap;
+  const long count = static_cast<long>(overlapGaps_.size());
   stats.meanPenetration = count > 0 ? sum / count : 0.0;
   stats.overlapping = count;
   stats.overlapSum += sum, stats.overlapCount += count;
@@ -660,8 +694,12 @@ void CollisionStage::checkOverlaps(Fabric& f, Real dt) {
   const int sweeps = params_.projectionSweepCount();
   const Real depth = params_.projectionCheck;
   if (sweeps <= 0 || depth < 0) return;
-  Real deepest = 0;
-  for (const CPContact& c : contacts_) deepest = std::max(deepest, -c.gap);
+  // The deepest overlap, a maximum per fixed chunk (exact in any order).
+  Real deepest = chunkedSum(static_cast<Index>(contacts_.size()), 4096, threads(), DeepestOf{}, [&](Index k0, Index k1) {
+                   DeepestOf d;
+                   for (Index k = k0; k < k1; ++k) d.value = std::max(d.value, -contacts_[k].gap);
+                   return d;
+                 }).value;
   for (const BodyContact& c : bodyContacts_) deepest = std::max(deepest, -c.gap);
   if (!(deepest > depth)) return;
   stats.maxChecked = std::max(stats.maxChecked, deepest);

@@ -232,6 +232,18 @@ class CollisionStage : public StepHook {
   std::vector<std::vector<CPContact>> slices_;  // narrow-phase output per chunk of pairs
   std::vector<long> reused_;                    // carried contacts per chunk of pairs
   std::vector<Real> capacity_;                  // flatten: both CPs' flattening capacity per contact [m]
+  std::vector<std::vector<Index>> flattenChunks_;  // flatten: the contacts that can flatten, per chunk
+  std::vector<Index> flattenList_;                 // and all of them in order
+  // beforeDrift's statistics of the contacts per fixed chunk: the deepest overlap (its first
+  // contact), the moving count, the overlaps in order
+  struct OverlapScan {
+    Real deepest = 0;
+    Index at = -1;
+    long moving = 0;
+  };
+  std::vector<OverlapScan> scanChunks_;
+  std::vector<std::vector<Real>> overlapChunks_;
+  std::vector<Real> overlapGaps_;
   std::vector<std::uint8_t> dirty_, dirtyYarn_, outside_;
   std::vector<CPPair> keptPairs_, freshPairs_, cachePairs_;
   std::vector<std::vector<CPPair>> keptChunks_;  // the kept pairs of each fixed chunk (broad)
