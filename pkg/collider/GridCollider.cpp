@@ -41,17 +41,18 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
   h *= 1.0000001;  // every AABB then spans at most two cells per axis
   cellSize = h;
   const Real ih = 1 / h;
-  const auto cellRange = [&](Index i, std::int64_t lo[3], std::int64_t hi[3]) {
-    for (int d = 0; d < 3; ++d)
-      lo[d] = static_cast<std::int64_t>(std::floor(lo_[i][d] * ih)), hi[d] = static_cast<std::int64_t>(std::floor(hi_[i][d] * ih));
-  };
-
-  // The cells of each CP: counted (threads), their starts, then written with their slots (threads).
+  // The cells of each CP: its range of cells per axis and their count (threads), their starts, then
+  // the cells written with their slots (threads).
+  cellLo_.resize(n), cellHi_.resize(n);
   cellBegin_.resize(n + 1);
   parallelFor(n, kParallelGrain, nThreads, [&](Index i) {
-    std::int64_t lo[3], hi[3];
-    cellRange(i, lo, hi);
-    cellBegin_[i + 1] = f.alive[i] ? static_cast<Index>((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1)) : 0;
+    const auto cell = [ih](const Vec3& x) {
+      return Cell{static_cast<std::int64_t>(std::floor(x.x() * ih)), static_cast<std::int64_t>(std::floor(x.y() * ih)),
+                  static_cast<std::int64_t>(std::floor(x.z() * ih))};
+    };
+    const Cell lo = cell(lo_[i]), hi = cell(hi_[i]);
+    cellLo_[i] = lo, cellHi_[i] = hi;
+    cellBegin_[i + 1] = f.alive[i] ? static_cast<Index>((hi.x - lo.x + 1) * (hi.y - lo.y + 1) * (hi.z - lo.z + 1)) : 0;
   });
   cellBegin_[0] = 0;
   for (Index i = 0; i < n; ++i) cellBegin_[i + 1] += cellBegin_[i];
@@ -62,12 +63,11 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
   cellOf_.resize(cells), cellSlot_.resize(cells), cellCP_.resize(cells);
   parallelFor(n, kParallelGrain, nThreads, [&](Index i) {
     if (!f.alive[i]) return;
-    std::int64_t lo[3], hi[3];
-    cellRange(i, lo, hi);
+    const Cell lo = cellLo_[i], hi = cellHi_[i];
     Index k = cellBegin_[i];
-    for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
-      for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-        for (std::int64_t z = lo[2]; z <= hi[2]; ++z, ++k) {
+    for (std::int64_t x = lo.x; x <= hi.x; ++x)
+      for (std::int64_t y = lo.y; y <= hi.y; ++y)
+        for (std::int64_t z = lo.z; z <= hi.z; ++z, ++k) {
           cellOf_[k] = {x, y, z}, cellCP_[k] = i;
           cellSlot_[k] = static_cast<std::uint32_t>(slotOf(x, y, z, mask));
         }
@@ -99,9 +99,12 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
     std::size_t s0, s1;
     range(p, s0, s1);
     const std::uint32_t offset = partTotal_[p];
-    for (std::size_t s = s0; s < s1; ++s) slotCount_[s + 1] += offset;
-    if (s1 > s0) fill_[s0] = offset;
-    for (std::size_t s = s0 + 1; s < s1; ++s) fill_[s] = slotCount_[s];
+    if (offset > 0)
+      for (std::size_t s = s0; s < s1; ++s) slotCount_[s + 1] += offset;
+    if (s1 > s0) {
+      fill_[s0] = offset;
+      std::copy(slotCount_.begin() + s0 + 1, slotCount_.begin() + s1, fill_.begin() + s0 + 1);
+    }
     for (std::size_t k = 0; k < cells; ++k)
       if (const std::uint32_t s = cellSlot_[k]; s >= s0 && s < s1) {
         const std::uint32_t at = fill_[s]++;

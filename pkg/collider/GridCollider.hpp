@@ -30,6 +30,7 @@ class GridCollider {
     std::int64_t x, y, z;
   };
   std::vector<Vec3> lo_, hi_;              // AABBs
+  std::vector<Cell> cellLo_, cellHi_;      // each CP's range of cells (lowest and highest per axis)
   std::vector<Cell> cellOf_;               // the cells of each CP: cellBegin_[i] .. cellBegin_[i+1]
   std::vector<std::uint32_t> cellSlot_;     // the hash slot of each of those cells
   std::vector<Index> cellCP_;               // and its CP
