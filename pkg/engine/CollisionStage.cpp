@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
-#include <iterator>
 #include <type_traits>
 #include <cmath>
 
@@ -28,14 +27,14 @@ inline double since(Clock::time_point& t) {
 inline bool lockedCP(const Fabric& f, Index e, Real mcd) {
   return f.secFlat[f.elem0[e]] >= mcd && f.secFlat[f.elem0[e] + 1] >= mcd;
 }
-// A body contact's key: its CP, body, part and end (BodyContact::end; -1: the sphere's own place,
-// or a box or cylinder contact). Only a contact of the same key is its memory: a sphere's contact
-// held at an end node measures that node's section, not the section at the centre's place.
 // A maximum carried as a sum (chunkedSum): the largest of the chunks' largest, exact in any order.
 struct DeepestOf {
   Real value = 0;
   DeepestOf& operator+=(const DeepestOf& o) { return value = std::max(value, o.value), *this; }
 };
+// A body contact's key: its CP, body, part and end (BodyContact::end; -1: the sphere's own place,
+// or a box or cylinder contact). Only a contact of the same key is its memory: a sphere's contact
+// held at an end node measures that node's section, not the section at the centre's place.
 inline std::uint64_t bodyKey(Index cp, int body, int part, int end) {
   return (static_cast<std::uint64_t>(cp) << 32) | (static_cast<std::uint64_t>(body & 0x3fff) << 18) |
          (static_cast<std::uint64_t>(part & 0xffff) << 2) | static_cast<std::uint64_t>(end + 1);
