@@ -61,6 +61,16 @@ class RowBlocks {
     int n;
   };
   std::vector<RowNodes> nodes_;
+  // What each fixed chunk of rows adds up: the extent of its first nodes and its yarn rows, its
+  // histogram, its rows per group and where they go in order().
+  static constexpr Index kChunk = 4096;
+  struct Chunk {
+    Vec3 lo, hi;
+    Index yarnRows = 0;
+    std::array<Index, kBins> count;
+    std::array<Index, kTail + 1> size, next;
+  };
+  std::vector<Chunk> chunks_;
   std::vector<std::uint8_t> group_;
   std::vector<Index> order_;
   std::array<Index, kTail + 2> start_ = {};
@@ -69,17 +79,27 @@ class RowBlocks {
 template <class NodesOf>
 void RowBlocks::build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf) {
   group_.resize(static_cast<std::size_t>(nRows));
-  // Each row's nodes, read once (a row is a large record; the passes below read these 20 bytes);
-  // the loops that write one row's items run on the threads (nodesOf only reads).
+  // Each row's nodes, read once (a row is a large record; the passes below read these 20 bytes).
+  // Every pass runs on the threads by fixed chunks of rows: a row's items are its own, and what the
+  // chunks add up (extents, histograms, counts) are exact in any order, so the blocks are the same
+  // on any thread count.
   nodes_.resize(static_cast<std::size_t>(nRows));
   parallelFor(nRows, kParallelGrain, threads(), [&](Index r) { nodes_[r].n = nodesOf(r, nodes_[r].node); });
+  const Index chunks = chunkCount(nRows, kChunk);
+  chunks_.resize(static_cast<std::size_t>(chunks));
+  const auto rowsOf = [&](Index t, Index& r0, Index& r1) { r0 = t * kChunk, r1 = std::min(nRows, r0 + kChunk); };
+  // The extent of the rows' first nodes, and the yarn rows (a row on a body has none).
+  parallelFor(chunks, 2, threads(), [&](Index t) {
+    Chunk& c = chunks_[t];
+    c.lo = Vec3::Constant(std::numeric_limits<Real>::infinity()), c.hi = -c.lo, c.yarnRows = 0;
+    Index r0, r1;
+    rowsOf(t, r0, r1);
+    for (Index r = r0; r < r1; ++r)
+      if (nodes_[r].n > 0) c.lo = c.lo.cwiseMin(pos[nodes_[r].node[0]]), c.hi = c.hi.cwiseMax(pos[nodes_[r].node[0]]), ++c.yarnRows;
+  });
   Vec3 lo = Vec3::Constant(std::numeric_limits<Real>::infinity()), hi = -lo;
   Index yarnRows = 0;
-  for (const RowNodes& q : nodes_) {
-    if (q.n <= 0) continue;
-    lo = lo.cwiseMin(pos[q.node[0]]), hi = hi.cwiseMax(pos[q.node[0]]);  // the extent of the rows' first nodes
-    ++yarnRows;
-  }
+  for (const Chunk& c : chunks_) lo = lo.cwiseMin(c.lo), hi = hi.cwiseMax(c.hi), yarnRows += c.yarnRows;
   // The cuts run across the extent's widest axis, at equal row counts.
   int axis = 0;
   if (yarnRows > 0) (hi - lo).maxCoeff(&axis);
@@ -90,9 +110,17 @@ void RowBlocks::build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf) {
     return x > 0 ? std::min(static_cast<int>(x), kBins - 1) : 0;
   };
   // A histogram of the rows' first nodes; bins go to block b until b + 1 shares of the rows are in.
+  parallelFor(chunks, 2, threads(), [&](Index t) {
+    Chunk& c = chunks_[t];
+    c.count.fill(0);
+    Index r0, r1;
+    rowsOf(t, r0, r1);
+    for (Index r = r0; r < r1; ++r)
+      if (nodes_[r].n > 0) ++c.count[bin(nodes_[r].node[0])];
+  });
   std::array<Index, kBins> count = {};
-  for (const RowNodes& q : nodes_)
-    if (q.n > 0) ++count[bin(q.node[0])];
+  for (const Chunk& c : chunks_)
+    for (int k = 0; k < kBins; ++k) count[k] += c.count[k];
   std::array<std::uint8_t, kBins> blockOf = {};
   Index below = 0;
   int b = 0;
@@ -101,31 +129,44 @@ void RowBlocks::build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf) {
     blockOf[k] = static_cast<std::uint8_t>(b);
     below += count[k];
   }
-  // Each row's group, then a stable counting sort by group.
-  parallelFor(nRows, kParallelGrain, threads(), [&](Index r) {
-    const RowNodes& q = nodes_[r];
-    int g = kTail;
-    if (q.n > 0) {
-      int lowest = kBlocks, highest = -1;
-      for (int k = 0; k < q.n; ++k) {
-        const int b = blockOf[bin(q.node[k])];
-        lowest = std::min(lowest, b), highest = std::max(highest, b);
+  // Each row's group and each chunk's rows per group, then a stable counting sort by group: a
+  // chunk's rows of group g go after the earlier chunks' rows of g.
+  parallelFor(chunks, 2, threads(), [&](Index t) {
+    Chunk& c = chunks_[t];
+    c.size.fill(0);
+    Index r0, r1;
+    rowsOf(t, r0, r1);
+    for (Index r = r0; r < r1; ++r) {
+      const RowNodes& q = nodes_[r];
+      int g = kTail;
+      if (q.n > 0) {
+        int lowest = kBlocks, highest = -1;
+        for (int k = 0; k < q.n; ++k) {
+          const int b = blockOf[bin(q.node[k])];
+          lowest = std::min(lowest, b), highest = std::max(highest, b);
+        }
+        g = highest == lowest ? lowest
+            : highest > lowest + 1 ? kSeam
+            : lowest % 2 == 0 ? kBlocks + lowest / 2  // an even cut
+                              : kBlocks + kBlocks / 2 + lowest / 2;  // an odd cut
       }
-      g = highest == lowest ? lowest
-          : highest > lowest + 1 ? kSeam
-          : lowest % 2 == 0 ? kBlocks + lowest / 2  // an even cut
-                            : kBlocks + kBlocks / 2 + lowest / 2;  // an odd cut
+      group_[r] = static_cast<std::uint8_t>(g);
+      ++c.size[g];
     }
-    group_[r] = static_cast<std::uint8_t>(g);
   });
-  std::array<Index, kTail + 1> size = {};
-  for (std::uint8_t g : group_) ++size[g];
   start_[0] = 0;
-  for (int g = 0; g <= kTail; ++g) start_[g + 1] = start_[g] + size[g];
-  std::array<Index, kTail + 1> next;
-  for (int g = 0; g <= kTail; ++g) next[g] = start_[g];
+  for (int g = 0; g <= kTail; ++g) {
+    Index at = start_[g];
+    for (Chunk& c : chunks_) c.next[g] = at, at += c.size[g];
+    start_[g + 1] = at;
+  }
   order_.resize(static_cast<std::size_t>(nRows));
-  for (Index r = 0; r < nRows; ++r) order_[next[group_[r]]++] = r;
+  parallelFor(chunks, 2, threads(), [&](Index t) {
+    Chunk& c = chunks_[t];
+    Index r0, r1;
+    rowsOf(t, r0, r1);
+    for (Index r = r0; r < r1; ++r) order_[c.next[group_[r]]++] = r;
+  });
 }
 
 }  // namespace woven

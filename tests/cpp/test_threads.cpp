@@ -362,7 +362,7 @@ TEST(Threads, BlockedAndSequentialSweepsConvergeToTheSameVelocities) {
 TEST(Threads, ParallelMergeAndJoinGiveTheSerialLists) {
   std::mt19937 rng(5);
   std::uniform_int_distribution<int> small(0, 3000);
-  for (const auto sizes : {std::pair<int, int>{20000, 7000}, {0, 5000}, {30000, 0}, {8192, 8193}}) {
+  for (const auto& sizes : {std::pair<int, int>{20000, 7000}, {0, 5000}, {30000, 0}, {8192, 8193}}) {
     // Pairs keyed on a only (b tells the copies apart): std::merge's order of equal keys is tested.
     std::vector<std::pair<int, int>> a(sizes.first), b(sizes.second);
     for (auto& x : a) x = {small(rng), 0};
