@@ -7,6 +7,18 @@
 
 namespace woven {
 
+namespace {
+// Contacts a sweep pushed and the largest overlap one of them took out [m].
+struct Pushes {
+  long count = 0;
+  Real largest = 0;
+  void add(Real left) {
+    if (left > 0) ++count, largest = std::max(largest, left);
+  }
+  Pushes& operator+=(const Pushes& o) { return count += o.count, largest = std::max(largest, o.largest), *this; }
+};
+}  // namespace
+
 void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
                                  std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop,
                                  Real maxMove, SectionRule rule, Real dt, ProjectionReport& rep, SweepOrder order,
@@ -114,24 +126,30 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     // threads. The later ones skip most contacts on their slot alone: on one thread, in the same
     // order (the same bits; a barrier per colour would cost more than the work where the cores are
     // busy). The blocks cost three barriers a sweep: every sweep but a check's on the threads.
-    if (blocked)
+    // The contacts pushed and the largest overlap they took out: per block by its thread, over the
+    // colours' outcomes after them, in the tail as it goes (a count and a maximum: exact in any order).
+    Pushes pushes;
+    if (blocked) {
+      Pushes group[RowBlocks::kSeam];
       for (int phase = 0; phase < RowBlocks::kPhases; ++phase) {
         const int g0 = RowBlocks::phaseBegin(phase);
         parallelFor(RowBlocks::phaseBegin(phase + 1) - g0, 1, check ? 1 : nThreads, [&](Index q) {
           for (Index k = blocking_.begin(g0 + q); k < blocking_.begin(g0 + q + 1); ++k)
-            outcome_[k] = projectOne(slots_[k], first);
+            group[g0 + q].add(outcome_[k] = projectOne(slots_[k], first));
         });
       }
-    else
+      for (const Pushes& g : group) pushes += g;
+    } else {
       for (int col = 0; col < colouring_.colours(); ++col) {
         const Index b = colouring_.begin(col);
         parallelFor(colouring_.begin(col + 1) - b, kContactGrain, first && !check ? nThreads : 1,
                     [&](Index k) { outcome_[b + k] = projectOne(slots_[b + k], first); });
       }
+      for (Index k = 0; k < tail; ++k) pushes.add(outcome_[k]);
+    }
     // The tail (a contact that found no colour free, or the blocks' seam) in order.
-    for (Index k = tail; k < nc; ++k) outcome_[k] = projectOne(slots_[k], first);
-    for (Real left : outcome_)
-      if (left > 0) ++rep.pushed, moved = true, rep.overlapLeft = std::max(rep.overlapLeft, left);
+    for (Index k = tail; k < nc; ++k) pushes.add(outcome_[k] = projectOne(slots_[k], first));
+    if (pushes.count > 0) rep.pushed += pushes.count, moved = true, rep.overlapLeft = pushes.largest;
     for (BodyContact& c : bodyContacts) {
       if (!f.alive[c.cp]) continue;
       const Index i = f.elem0[c.cp];
