@@ -332,8 +332,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
             if (apart <= nearest) nearest = apart, remembered = pc.memoMeasure[p];
           }
           if (std::isnan(remembered))
-            remembered = sectionAt(f, pr.a, two[q].sA, params_.rule, &chords_.unit[pr.a]).b +
-                         sectionAt(f, pr.b, two[q].sB, params_.rule, &chords_.unit[pr.b]).b;
+            remembered = semiAxesAt(f, pr.a, two[q].sA, params_.rule).b + semiAxesAt(f, pr.b, two[q].sB, params_.rule).b;
           capMeasure(two[q], remembered);
         }
         pc.memo = true, pc.side = side, pc.memoPoints = m;

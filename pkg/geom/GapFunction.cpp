@@ -111,16 +111,29 @@ Real thicknessWeight(const Vec3& tA, const Vec3& tB) {
   return std::clamp((angle - lo) / (hi - lo), Real(0), Real(1));
 }
 
-// The section of CP e at s in the yarn's own plane (normal to yarnTangent), for the supports.
-SectionAt yarnSection(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3Array* tangent,
-                      const ChordFrames* chords) {
-  SectionAt q = sectionAt(f, e, s, rule, chords ? &chords->unit[e] : nullptr);
-  const Vec3 t = yarnTangent(f, e, s, tangent, q.t);  // q.t: the chord's direction
-  Vec3 d = q.d - q.d.dot(t) * t;
-  q.t = t;
-  q.d = d.norm() > 1e-9 ? Vec3(d.normalized()) : t.unitOrthogonal();
-  q.u = t.cross(q.d);
+// CP e's unit chord: the stage's (ChordFrames) where given, else from the positions (the same
+// expression).
+inline Vec3 chordOf(const Fabric& f, Index e, const ChordFrames* chords) {
+  const Index i = f.elem0[e];
+  return chords ? chords->unit[e] : Vec3((f.pos[i + 1] - f.pos[i]).normalized());
+}
+
+// The section of CP e at s in the yarn's own plane (normal to yarnTangent), for the supports, in two
+// parts: its tangent t and semi-axes (yarnSection), which every contact reads; its axes u, d
+// (yarnFrame), which only a support across the section reads. Crossing pieces (at more than 45
+// degrees: the half-thicknesses alone, fillPair) skip the second part, which was half the cost.
+SectionAt yarnSection(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3Array* tangent, const Vec3& chord) {
+  SectionAt q;
+  const SemiAxes ax = semiAxesAt(f, e, s, rule);
+  q.a = ax.a, q.b = ax.b;
+  q.t = yarnTangent(f, e, s, tangent, chord);
   return q;
+}
+void yarnFrame(const Fabric& f, Index e, Real s, const Vec3& chord, SectionAt& q) {
+  const Vec3 d0 = sectionDir(f, e, s, chord);  // sectionAt's d, normal to the chord
+  const Vec3 d = d0 - d0.dot(q.t) * q.t;
+  q.d = d.norm() > 1e-9 ? Vec3(d.normalized()) : q.t.unitOrthogonal();
+  q.u = q.t.cross(q.d);
 }
 
 // One CP-CP contact from the axis points A(s), B(t) with the sections' supports along the normal.
@@ -134,15 +147,21 @@ void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kin
   Real r;
   orientNormal(pB - pA, orient, s > 0 && s < 1 && t > 0 && t < 1, tA, tB, centres, n, r);
   if (sections) {
-    const SectionAt qa = yarnSection(f, a, s, rule, tangent, chords), qb = yarnSection(f, b, t, rule, tangent, chords);
+    const Vec3 chordA = chordOf(f, a, chords), chordB = chordOf(f, b, chords);
+    SectionAt qa = yarnSection(f, a, s, rule, tangent, chordA), qb = yarnSection(f, b, t, rule, tangent, chordB);
     c.hDir = supportDirection(n, qa.t, qb.t, kind == ContactKind::Side);
     // Half-thicknesses where the pieces cross at more than 45 degrees, supports along hDir (widths
     // where the ribbons meet edge to edge) below 20, blended between: g must not jump where a pair
     // turns from crossing to side by side (see GapFunction.hpp).
     // A yarn folded back onto itself folds about its width (the easy way): its legs lie face to face.
     const Real lambda = f.elemYarn[a] == f.elemYarn[b] ? 1.0 : thicknessWeight(qa.t, qb.t);
-    c.hA = lambda * qa.b + (1 - lambda) * support(qa, c.hDir);
-    c.hB = lambda * qb.b + (1 - lambda) * support(qb, c.hDir);
+    if (lambda == 1) {  // 1 b + 0 support is b exactly (a support is finite): no frames needed
+      c.hA = qa.b, c.hB = qb.b;
+    } else {
+      yarnFrame(f, a, s, chordA, qa), yarnFrame(f, b, t, chordB, qb);
+      c.hA = lambda * qa.b + (1 - lambda) * support(qa, c.hDir);
+      c.hB = lambda * qb.b + (1 - lambda) * support(qb, c.hDir);
+    }
     const Real H = c.hA + c.hB;
     c.hHeld = H > c.hCap ? H - c.hCap : 0.0;  // the measure memory (capMeasure)
     if (H > c.hCap) c.hA *= c.hCap / H, c.hB *= c.hCap / H;
@@ -158,19 +177,29 @@ void fillPair(const Fabric& f, Index a, Index b, Real s, Real t, ContactKind kin
 
 }  // namespace
 
+Vec3 sectionDir(const Fabric& f, Index e, Real s, const Vec3& chord) {
+  const Index i = f.elem0[e], j = i + 1;
+  const Vec3& dj = f.secDir[j];
+  Vec3 d = (1 - s) * f.secDir[i] + s * (f.secDir[i].dot(dj) < 0 ? Vec3(-dj) : dj);
+  d -= d.dot(chord) * chord;
+  return d.norm() > 1e-9 ? Vec3(d.normalized()) : chord.unitOrthogonal();
+}
+
+SemiAxes semiAxesAt(const Fabric& f, Index e, Real s, SectionRule rule) {
+  const Index i = f.elem0[e], j = i + 1;
+  const SemiAxes si = semiAxes(f.secRadius[i], f.secFlat[i], rule), sj = semiAxes(f.secRadius[j], f.secFlat[j], rule);
+  return {(1 - s) * si.a + s * sj.a, (1 - s) * si.b + s * sj.b};
+}
+
 SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3* chord) {
   const Index i = f.elem0[e], j = i + 1;
   SectionAt q;
   q.centre = (1 - s) * f.pos[i] + s * f.pos[j];
   q.t = chord ? *chord : Vec3((f.pos[j] - f.pos[i]).normalized());
-  const Vec3& dj = f.secDir[j];
-  Vec3 d = (1 - s) * f.secDir[i] + s * (f.secDir[i].dot(dj) < 0 ? Vec3(-dj) : dj);
-  d -= d.dot(q.t) * q.t;
-  q.d = d.norm() > 1e-9 ? Vec3(d.normalized()) : q.t.unitOrthogonal();
+  q.d = sectionDir(f, e, s, q.t);
   q.u = q.t.cross(q.d);
-  const SemiAxes si = semiAxes(f.secRadius[i], f.secFlat[i], rule), sj = semiAxes(f.secRadius[j], f.secFlat[j], rule);
-  q.a = (1 - s) * si.a + s * sj.a;
-  q.b = (1 - s) * si.b + s * sj.b;
+  const SemiAxes ax = semiAxesAt(f, e, s, rule);
+  q.a = ax.a, q.b = ax.b;
   return q;
 }
 

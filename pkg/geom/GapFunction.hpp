@@ -75,6 +75,10 @@ struct SectionAt {
 };
 /// `chord` (may be null: computed) is the unit chord of e at the current positions (ChordFrames).
 SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3* chord = nullptr);
+/// sectionAt's minor axis d alone (`chord`: e's unit chord, which d is made normal to).
+Vec3 sectionDir(const Fabric& f, Index e, Real s, const Vec3& chord);
+/// sectionAt's semi-axes alone (a, b) [m].
+SemiAxes semiAxesAt(const Fabric& f, Index e, Real s, SectionRule rule);
 
 /// Each CP's unit chord, (x_{i+1} - x_i) / |x_{i+1} - x_i|, and its length, taken once per narrow
 /// phase for the pairs that share the CP (each CP is in about four pairs): the same expressions, so
