@@ -31,14 +31,16 @@ OBB cpBound(const Fabric& f, const Vec3Array& tangent, Index e, SectionRule rule
   b.axes.col(0) = A0;
   b.axes.col(1) = A2.cross(A0);
   b.axes.col(2) = A2;
+  // Each node's section (semi-axes and major axis) once, for the three box axes.
   const Index node[2] = {i, j};
+  const SemiAxes s[2] = {semiAxes(f.secRadius[i], f.secFlat[i], rule), semiAxes(f.secRadius[j], f.secFlat[j], rule)};
+  const Vec3 u[2] = {tangent[i].cross(f.secDir[i]), tangent[j].cross(f.secDir[j])};
   for (int ax = 0; ax < 3; ++ax) {
     const Vec3 w = b.axes.col(ax);
     Real ext = 0;
-    for (Index k : node) {
-      const SemiAxes s = semiAxes(f.secRadius[k], f.secFlat[k], rule);
-      const Vec3 u = tangent[k].cross(f.secDir[k]);
-      ext = std::max(ext, std::abs((f.pos[k] - b.centre).dot(w)) + ellipseSupport(u, f.secDir[k], s.a, s.b, w));
+    for (int q = 0; q < 2; ++q) {
+      const Index k = node[q];
+      ext = std::max(ext, std::abs((f.pos[k] - b.centre).dot(w)) + ellipseSupport(u[q], f.secDir[k], s[q].a, s[q].b, w));
     }
     b.extent[ax] = ext + margin;
   }

@@ -288,7 +288,7 @@ Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool fricti
 
 // solveRow's update of a row on no body while friction between yarns is off, in the same operations:
 // the same bits (measured: the scenes' figures unchanged to the last digit).
-Real ImpulseLaw::solveRow(Fabric& f, SweepRow& r) {
+[[gnu::always_inline]] inline Real ImpulseLaw::solveRow(Fabric& f, SweepRow& r) {
   const Real vn = relativeVelocity(f, r.node, r.w).dot(r.n);
   const Real miss = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
   const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
