@@ -185,12 +185,6 @@ Vec3 sectionDir(const Fabric& f, Index e, Real s, const Vec3& chord) {
   return d.norm() > 1e-9 ? Vec3(d.normalized()) : chord.unitOrthogonal();
 }
 
-SemiAxes semiAxesAt(const Fabric& f, Index e, Real s, SectionRule rule) {
-  const Index i = f.elem0[e], j = i + 1;
-  const SemiAxes si = semiAxes(f.secRadius[i], f.secFlat[i], rule), sj = semiAxes(f.secRadius[j], f.secFlat[j], rule);
-  return {(1 - s) * si.a + s * sj.a, (1 - s) * si.b + s * sj.b};
-}
-
 SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3* chord) {
   const Index i = f.elem0[e], j = i + 1;
   SectionAt q;

@@ -77,8 +77,12 @@ struct SectionAt {
 SectionAt sectionAt(const Fabric& f, Index e, Real s, SectionRule rule, const Vec3* chord = nullptr);
 /// sectionAt's minor axis d alone (`chord`: e's unit chord, which d is made normal to).
 Vec3 sectionDir(const Fabric& f, Index e, Real s, const Vec3& chord);
-/// sectionAt's semi-axes alone (a, b) [m].
-SemiAxes semiAxesAt(const Fabric& f, Index e, Real s, SectionRule rule);
+/// sectionAt's semi-axes alone (a, b) [m]: each node's, interpolated linearly.
+inline SemiAxes semiAxesAt(const Fabric& f, Index e, Real s, SectionRule rule) {
+  const Index i = f.elem0[e], j = i + 1;
+  const SemiAxes si = semiAxes(f.secRadius[i], f.secFlat[i], rule), sj = semiAxes(f.secRadius[j], f.secFlat[j], rule);
+  return {(1 - s) * si.a + s * sj.a, (1 - s) * si.b + s * sj.b};
+}
 
 /// Each CP's unit chord, (x_{i+1} - x_i) / |x_{i+1} - x_i|, and its length, taken once per narrow
 /// phase for the pairs that share the CP (each CP is in about four pairs): the same expressions, so
