@@ -35,7 +35,9 @@ std::vector<std::uint8_t> slowElements(const Fabric& f, Real outerDt) {
   return slow;
 }
 
-ChainDynamics::ChainDynamics(Fabric& fabric) : f_(fabric), dtCrit_(criticalTimeStep(fabric)) {}
+ChainDynamics::ChainDynamics(Fabric& fabric) : f_(fabric), dtCrit_(criticalTimeStep(fabric)) {
+  for (Index i = 0; i < f_.nNodes(); ++i) mass_ += f_.mass[i];
+}
 
 void ChainDynamics::prescribeVelocity(Index i, const Vec3& v) {
   f_.checkNode(i);
@@ -383,9 +385,11 @@ void ChainDynamics::step(Real dt, StepHook* hook, bool outerEnd) {
   // which reaches 50x at 0.99 dt_crit: a budget without that factor stops stable runs.
   const Real s = dt / dtCrit_;
   const Real stableRange = s < 1 ? 1 / (1 - s * s) : 1.0;
+  // |initial|: the half-drift term of penalty springs (StepHook::springEnergy) can leave it a rounding
+  // below 0, and a negative budget stops a fabric at rest.
   const Real budget =
-      limits.blowupFactor * stableRange * (books_.initial + std::abs(books_.work) + books_.contactInput) +
-      limits.energyFloor;
+      limits.blowupFactor * stableRange * (std::abs(books_.initial) + std::abs(books_.work) + books_.contactInput) +
+      limits.energyFloor + 0.5 * mass_ * limits.restSpeed * limits.restSpeed;
   if (books_.total() > budget) {
     Index worst = 0;
     Real worstKe = -1;
@@ -396,7 +400,7 @@ void ChainDynamics::step(Real dt, StepHook* hook, bool outerEnd) {
     throw InstabilityError(step_, worst, -1,
                            "energy blow-up: kinetic+elastic+damped+contact+spring+projection = " +
                                fmt(books_.total()) + " J exceeds " +
-                               fmt(limits.blowupFactor) + " x (initial + |work| + contact input) / (1 - (dt/dt_crit)^2) = " + fmt(budget) +
+                               fmt(limits.blowupFactor) + " x (|initial| + |work| + contact input) / (1 - (dt/dt_crit)^2) + floor = " + fmt(budget) +
                                " J (time step too large, or a load out of bounds)");
   }
   // Only where a step of every rate ends (outerEnd), once per checkpointInterval chain steps: the

@@ -29,11 +29,15 @@ Real criticalTimeStep(const Fabric& f);
 std::vector<std::uint8_t> slowElements(const Fabric& f, Real outerDt);
 
 struct InstabilityLimits {
-  /// Stop if kinetic+elastic+damped+contact > factor*(initial+|work|+contact input)/(1-(dt/dt_crit)^2) + floor (the
+  /// Stop if kinetic+elastic+damped+contact > factor*(|initial|+|work|+contact input)/(1-(dt/dt_crit)^2) + floor (the
   /// 1/(1-(dt/dt_crit)^2) is how far a stable step lets the energy of a linear chain oscillate above
-  /// the scheme's invariant; it is 1 for dt >= dt_crit).
+  /// the scheme's invariant; it is 1 for dt >= dt_crit). The floor is energyFloor plus the fabric's
+  /// kinetic energy with every node at restSpeed: below it the books hold rounding, not motion (a
+  /// fabric at rest under penalty contacts on the gap model reads ~1e-30 J, against 2.8e-22 J for
+  /// the default ply's 0.56 g at 1 nm/s; a real blow-up grows past it within steps).
   Real blowupFactor = 3.0;
   Real energyFloor = 1e-300;      ///< [J]
+  Real restSpeed = 1e-9;          ///< [m/s]
   long checkpointInterval = 100;  ///< steps between copies of the last good state
 };
 
@@ -183,6 +187,7 @@ class ChainDynamics {
   Real time_ = 0;
   Real dtPrev_ = 0;
   Real dtCrit_ = 0;     // criticalTimeStep of the fabric: the engine's dt limit and the blow-up budget
+  Real mass_ = 0;       // the fabric's mass [kg] (the blow-up floor)
   Breakage breakage_;
   std::vector<std::uint8_t> slow_;  // per element: 1 slow (multi-rate), empty: one rate
   int rate_ = 1;                    // chain steps per slow step (1: one rate)
