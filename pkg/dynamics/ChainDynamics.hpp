@@ -33,8 +33,8 @@ struct InstabilityLimits {
   /// 1/(1-(dt/dt_crit)^2) is how far a stable step lets the energy of a linear chain oscillate above
   /// the scheme's invariant; it is 1 for dt >= dt_crit). The floor is energyFloor plus the fabric's
   /// kinetic energy with every node at restSpeed: below it the books hold rounding, not motion (a
-  /// fabric at rest under penalty contacts on the gap model reads ~1e-30 J, against 2.8e-22 J for
-  /// the default ply's 0.56 g at 1 nm/s; a real blow-up grows past it within steps).
+  /// fabric at rest under penalty contacts on the gap model reads ~1e-30 J, against 2.4e-22 J for
+  /// the default ply's 0.47 g at 1 nm/s; a real blow-up grows past it within steps).
   Real blowupFactor = 3.0;
   Real energyFloor = 1e-300;      ///< [J]
   Real restSpeed = 1e-9;          ///< [m/s]
