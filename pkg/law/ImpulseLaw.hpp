@@ -132,7 +132,8 @@ class ImpulseLaw {
   static Real solveRow(Fabric& f, SweepRow& r);  // the same update, for a row without friction or body
   int solve(Fabric& f, const ContactParams& p, bool friction);  // Gauss-Seidel sweeps in rows_'s layout, returns the count
   void keepVelocities(const Fabric& f);      // of the touched nodes, before the impulses
-  Real energyChange(const Fabric& f) const;  // kinetic energy of the integer step the impulses add [J]
+  // Kinetic energy of the integer step the impulses add [J]: step n's, or step n+1's after the drift.
+  Real energyChange(const Fabric& f, bool afterDrift) const;
   std::vector<Row> rows_, sorted_;
   std::vector<SweepRow> packed_;  // solve: rows_ packed, while friction between yarns is off
   std::vector<Row> slots_;      // resolve: per contact its row (where hasRow_)
