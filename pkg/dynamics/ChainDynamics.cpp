@@ -389,7 +389,7 @@ void ChainDynamics::step(Real dt, StepHook* hook, bool outerEnd) {
   // below 0, and a negative budget stops a fabric at rest.
   const Real budget =
       limits.blowupFactor * stableRange * (std::abs(books_.initial) + std::abs(books_.work) + books_.contactInput) +
-      limits.energyFloor + 0.5 * mass_ * limits.restSpeed * limits.restSpeed;
+      0.5 * mass_ * limits.restSpeed * limits.restSpeed;
   if (books_.total() > budget) {
     Index worst = 0;
     Real worstKe = -1;

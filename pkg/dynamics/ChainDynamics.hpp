@@ -31,12 +31,13 @@ std::vector<std::uint8_t> slowElements(const Fabric& f, Real outerDt);
 struct InstabilityLimits {
   /// Stop if kinetic+elastic+damped+contact > factor*(|initial|+|work|+contact input)/(1-(dt/dt_crit)^2) + floor (the
   /// 1/(1-(dt/dt_crit)^2) is how far a stable step lets the energy of a linear chain oscillate above
-  /// the scheme's invariant; it is 1 for dt >= dt_crit). The floor is energyFloor plus the fabric's
-  /// kinetic energy with every node at restSpeed: below it the books hold rounding, not motion (a
-  /// fabric at rest under penalty contacts on the gap model reads ~1e-30 J, against 2.4e-22 J for
-  /// the default ply's 0.47 g at 1 nm/s; a real blow-up grows past it within steps).
+  /// the scheme's invariant; it is 1 for dt >= dt_crit). The floor is the fabric's kinetic energy
+  /// with every node at restSpeed: below it the books hold rounding, not motion (a fabric at rest
+  /// under penalty contacts on the gap model reads ~1e-30 J, against 2.4e-22 J for the default ply's
+  /// 0.47 g at 1 nm/s; a real blow-up grows past it within steps). restSpeed holds the place of the
+  /// earlier absolute floor (1e-300 J) in the struct, so snapshots (engine/Snapshot) of earlier
+  /// builds still read, with that old, nearly zero floor.
   Real blowupFactor = 3.0;
-  Real energyFloor = 1e-300;      ///< [J]
   Real restSpeed = 1e-9;          ///< [m/s]
   long checkpointInterval = 100;  ///< steps between copies of the last good state
 };

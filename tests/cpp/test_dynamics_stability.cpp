@@ -139,8 +139,8 @@ TEST(DynamicsStability, RoundingInTheBooksIsNotABlowUp) {
   Fabric f = straightChain(20, 1e-3);
   Real mass = 0;
   for (Index i = 0; i < f.nNodes(); ++i) mass += f.mass[i];
-  const Real floor = 0.5 * mass * 1e-9 * 1e-9;  // restSpeed's default
   ChainDynamics dyn(f);
+  const Real floor = 0.5 * mass * dyn.limits.restSpeed * dyn.limits.restSpeed;  // 1 nm/s
   const Real dt = 0.7 * dyn.criticalDt();
   NoiseSprings noise(-1e-30);
   EXPECT_NO_THROW(for (int k = 0; k < 10; ++k) dyn.step(dt, &noise));
