@@ -178,8 +178,9 @@ void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real b
                         bool yarnContacts, Real cacheDistance, const std::string& response, Real penaltyStiffness,
                         Real penaltyDamping, const std::string& flattening, Real sectionStiffness,
                         const std::string& model, int projectionSweeps, Real projectionSlop, Real projectionMaxMove,
-                        const std::string& sweepOrder, Real projectionCheck) {
+                        const std::string& sweepOrder, Real projectionCheck, const std::string& crossings) {
   ContactParams p;
+  p.crossings = crossingsByName(crossings);
   p.sweepOrder = sweepOrderByName(sweepOrder);
   p.model = contactModelByName(model), p.projectionSweeps = projectionSweeps, p.projectionSlop = projectionSlop;
   p.projectionMaxMove = projectionMaxMove, p.projectionCheck = projectionCheck;
@@ -219,6 +220,13 @@ bp::dict collisionStats(FabricEngine& e) {
   d["tree_rebuilt_nodes"] = stageOf(e).tree.stats.rebuiltNodes;
   d["body_contacts"] = s.bodyContacts, d["body_penetration"] = s.bodyPenetration, d["deepest_body_cp"] = s.deepestBodyCP;
   d["max_body_penetration"] = s.maxBodyPenetration, d["body_lists"] = stageOf(e).bodyCollider.rebuilds;
+  // The persistent crossings (ContactParams::crossings): live now, listed as contacts in the last
+  // step, formed and handed back (by rule) since the start, footprint moves since the start.
+  d["crossings"] = s.crossings.live, d["crossing_contacts"] = s.crossings.listed;
+  d["crossings_formed"] = s.crossings.formed, d["crossings_moved"] = s.crossings.moved;
+  d["handed_back_break"] = s.crossings.handedBack[0], d["handed_back_separation"] = s.crossings.handedBack[1];
+  d["handed_back_turn"] = s.crossings.handedBack[2], d["handed_back_slide"] = s.crossings.handedBack[3];
+  d["handed_back_kink"] = s.crossings.handedBack[4];
   return d;
 }
 
@@ -347,6 +355,13 @@ bp::object contactsPy(FabricEngine& e) {  // cpA, cpB, gap [m], normal x y z, sA
   for (const CPContact& c : stageOf(e).contacts())
     out.insert(out.end(), {Real(c.cpA), Real(c.cpB), c.gap, c.normal.x(), c.normal.y(), c.normal.z(), c.sA, c.sB,
                            Real(static_cast<int>(c.kind)), c.hA, c.hB});
+  return bytesOf(out);
+}
+bp::object crossingsPy(FabricEngine& e) {  // cpA, sA, cpB, sB, normal x y z, measure [m], impulse [N s] per persistent crossing
+  std::vector<Real> out;
+  for (const Crossing& x : stageOf(e).crossings().crossings())
+    out.insert(out.end(), {Real(x.a.cp), x.a.s, Real(x.b.cp), x.b.s, x.normal.x(), x.normal.y(), x.normal.z(), x.measure,
+                           x.lambda});
   return bytesOf(out);
 }
 bp::object semiAxesPy(FabricEngine& e) {  // a, b per node [m] with the stage's section rule
@@ -583,7 +598,7 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("response") = "impulse", bp::arg("penalty_stiffness") = 1e5, bp::arg("penalty_damping") = 0.0,
             bp::arg("flattening") = "geometric", bp::arg("section_stiffness") = 1e4, bp::arg("contact_model") = "gap",
             bp::arg("projection_sweeps") = -1, bp::arg("projection_slop") = 0.5e-6, bp::arg("projection_max_move") = 10e-6,
-            bp::arg("sweep_order") = "sequential", bp::arg("projection_check") = 2e-6),
+            bp::arg("sweep_order") = "sequential", bp::arg("projection_check") = 2e-6, bp::arg("crossings") = "persistent"),
            "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction (yarn-yarn) and body_friction "
            "(rigid body-yarn) in [0, 2], 0 with response 'penalty', mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
@@ -596,7 +611,8 @@ BOOST_PYTHON_MODULE(_woven) {
            "'paper' (Sections 4-5), projection_sweeps in [0, 50] or -1 (auto: 8 with 'gap' and 'impulse', else 0), "
            "projection_slop [m] in [0, 1e-3], projection_max_move [m] in (0, 1e-3], sweep_order 'sequential' (contact order; the default), "
            "'coloured' (rows of a colour on the threads) or 'blocked' (slabs of the ply on the threads), projection_check [m] in [0, 1e-3] or -1 (contacts still deeper "
-           "after the flattening are projected out before the rows; -1: no check). See woven.contact.")
+           "after the flattening are projected out before the rows; -1: no check), crossings 'persistent' (one contact per crossing, "
+           "carried between steps; the default) or 'chords' (every CP pair measured afresh). See woven.contact.")
       .def("disable_collisions", +[](FabricEngine& e) { e.disableCollisions(); })
       .add_property("collisions_enabled", +[](FabricEngine& e) { return e.collisions() != nullptr; })
       .def("settle_sections", +[](FabricEngine& e, int passes) { return stageOf(e).settle(e.fabric(), passes); },
@@ -607,6 +623,7 @@ BOOST_PYTHON_MODULE(_woven) {
       .def("collision_stats", &collisionStats, "dict: last step's counts, and maxima since the start (SI)")
       .def("_candidate_pairs", &candidatePairsPy, (bp::arg("broad_phase")))
       .def("_contacts", &contactsPy)
+      .def("_crossings", &crossingsPy)
       .def("enable_breakage", &enableBreakage,
            (bp::arg("strain") = 0.0, bp::arg("filter_length") = -4.0, bp::arg("weibull_m") = 0.0, bp::arg("seed") = 1),
            "Yarn breakage: an element breaks when its strain, low-pass filtered in time over tau = "

@@ -4,6 +4,7 @@
 #pragma once
 #include "core/Parallel.hpp"
 #include "bound/OBB.hpp"
+#include "collider/CrossingFootprints.hpp"
 #include "fabric/Fabric.hpp"
 #include <cmath>
 #include <vector>
@@ -20,9 +21,12 @@ struct CPPair {
 /// CPs that share a node (1), and, per yarn, every pair closer along the yarn than its section
 /// diameter at rest: 1 + ceil(2 r0 / l0_min) (they are the yarn's own body: a yarn of 0.27 mm
 /// diameter cut into 0.19 mm CPs overlaps itself over three CPs).
+/// And pairs of two yarns that a persistent crossing stands for (CrossingFootprints) never enter the
+/// general pipeline.
 struct PairFilter {
   Index selfExclude = 1;          ///< the user's minimum
   std::vector<Index> yarnExclude; ///< per yarn, from its sections and CP lengths (set by configure)
+  const CrossingFootprints* crossings = nullptr;  ///< the live crossings' footprints (none: null)
   /// `widen`: the widest semi-axis a section can reach, over r0 (1 for round sections; the gap
   /// model measures flattened widths side by side, up to r0 / (1 - MCD), and a yarn folded back on
   /// itself cannot hold its two legs that far apart across fewer CPs: they would fight its springs).
@@ -40,7 +44,7 @@ struct PairFilter {
   bool excluded(const Fabric& f, Index a, Index b) const {
     if (!f.alive[a] || !f.alive[b]) return true;
     const Index y = f.elemYarn[a];
-    if (y != f.elemYarn[b]) return false;
+    if (y != f.elemYarn[b]) return crossings && crossings->covers(a, b);
     const Index k = static_cast<std::size_t>(y) < yarnExclude.size() ? yarnExclude[y] : selfExclude;
     return std::abs(a - b) <= k;
   }

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <type_traits>
 #include <cmath>
+#include <cstdlib>
 
 namespace woven {
 
@@ -62,11 +63,15 @@ Real CollisionStage::capacityOne(const Fabric& f, const CPContact& c, bool sideB
   const Index e = sideB ? c.cpB : c.cpA;
   if (c.kind == ContactKind::Paper) return flatteningCapacity(f, tangent_, e, c.normal, params_, flat);
   return flatteningCapacityAt(f, tangent_, e, sideB ? c.sB : c.sA, sideB ? Vec3(-c.hDir) : c.hDir,
-                              c.kind == ContactKind::Cross && crossesSteeply(f, c), params_, flat);
+                              measuresThickness(f, c), params_, flat);
 }
 
-// A gap contact whose measure is mostly the half-thickness (pieces crossing at more than 32.5
-// degrees, half way through the blend of GapFunction's thicknessWeight): it flattens b itself.
+// A gap contact whose measure is mostly the half-thickness (a persistent crossing; pieces crossing
+// at more than 32.5 degrees, half way through the blend of GapFunction's thicknessWeight): it
+// flattens b itself.
+bool CollisionStage::measuresThickness(const Fabric& f, const CPContact& c) const {
+  return c.kind == ContactKind::Crossing || (c.kind == ContactKind::Cross && crossesSteeply(f, c));
+}
 bool CollisionStage::crossesSteeply(const Fabric& f, const CPContact& c) const {
   if (f.elemYarn[c.cpA] == f.elemYarn[c.cpB]) return true;  // a fold: face to face (GapFunction)
   const Vec3 tA = (f.pos[f.elem0[c.cpA] + 1] - f.pos[f.elem0[c.cpA]]).normalized();
@@ -92,6 +97,63 @@ void CollisionStage::setParams(const ContactParams& p) {
   restFlat_.clear();
   filter_.selfExclude = p.selfExclude;
   filter_.yarnExclude.clear();  // configured again for the fabric at the next refit
+}
+
+void CollisionStage::invalidateCache() {
+  cache_.clear(), memo_.clear(), cachePairs_.clear(), forgetHeld_ = true;
+  // The crossings' pairs return to the general pipeline: a full broad phase lists them again.
+  if (!crossings_.empty()) pairsValid_ = false;
+  crossings_.reset(Fabric{});
+}
+
+void CollisionStage::trackCrossings(const Fabric& f) {
+  if (!params_.persistentCrossings()) {
+    filter_.crossings = nullptr;
+    if (!crossings_.empty()) crossings_.reset(Fabric{}), pairsValid_ = false;
+    return;
+  }
+  if (crossings_.footprints().size() != f.nElems()) crossings_.reset(f);
+  filter_.crossings = &crossings_.footprints();
+  renew_.assign(static_cast<std::size_t>(f.nElems()), 0);
+  if (crossings_.track(f, params_, renew_)) {  // footprints moved onto new CPs: their pairs leave
+    crossings_.exclude(pairs_);
+    pairsChanged_ = true;
+  }
+}
+
+// The pairs the crossings returned this step start from the crossing's side, their measure held to
+// the room their axes leave (PairMemo::held): the chords, which run inside a crossing's curves by up
+// to a few percent of the thickness, take over without an overlap the curves did not have.
+void CollisionStage::seedReturned() {
+  for (const ReturnedFootprint& r : crossings_.returned())
+    for (Index a = r.a0; a <= r.a1; ++a)
+      for (auto it = std::lower_bound(pairs_.begin(), pairs_.end(), CPPair{a, r.b0});
+           it != pairs_.end() && it->a == a && it->b <= r.b1; ++it) {
+        PairMemo& pc = memo_[it - pairs_.begin()];
+        if (pc.memo) continue;
+        pc.memo = true, pc.side = false, pc.held = true, pc.memoPoints = 0;
+        pc.memoNormal[0] = pc.memoNormal[1] = r.normal;
+      }
+}
+
+void CollisionStage::measureCrossings(const Fabric& f, Real dt, bool formNew) {
+  if (!params_.persistentCrossings()) return;
+  if (formNew && crossings_.form(f, contacts_, params_)) {
+    // The new crossings' chord pairs leave the candidates and this step's contacts.
+    crossings_.exclude(pairs_);
+    crossings_.exclude(contacts_);
+    pairsChanged_ = true;
+  }
+  // Listed as the CP pairs are (narrow), the lines' points moving no faster than the fastest node
+  // of their CP and its neighbours (the nodes they read: YarnCurve's convex weights).
+  const Real projected = projectionReach(dt);
+  crossings_.measure(f, params_,
+                     [&](const CPContact& c) {
+                       return params_.margin +
+                              2 * projected + dt * (fastestNear(f, c.cpA) + fastestNear(f, c.cpB));
+                     },
+                     contacts_);
+  stats.crossings = crossings_.counts;
 }
 
 void CollisionStage::refit(Fabric& f, Real dt) {
@@ -134,8 +196,11 @@ void CollisionStage::broad(const Fabric& f) {
   if (pairsValid_ && skinBoxes_.size() == grown_.size()) {
     // The containment test of every CP (threads), then the CPs and yarns that left (in order).
     outside_.resize(grown_.size());
-    parallelFor(static_cast<Index>(grown_.size()), kParallelGrain, threads(),
-                [&](Index e) { outside_[e] = !inside(grown_[e], skinBoxes_[e]); });
+    // and the CPs a persistent crossing handed back (their pairs return).
+    const bool renewing = renew_.size() == grown_.size();
+    parallelFor(static_cast<Index>(grown_.size()), kParallelGrain, threads(), [&](Index e) {
+      outside_[e] = !inside(grown_[e], skinBoxes_[e]) || (renewing && renew_[e]);
+    });
     if (std::find(outside_.begin(), outside_.end(), 1) == outside_.end()) return;
     if (broadPhase != BroadPhase::SweepAndPrune) {
       const bool byYarn = broadPhase == BroadPhase::YarnTree;
@@ -244,6 +309,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
       memo_.size() != (gapModel ? pairs_.size() : 0))
     remapCache(caching, gapModel);
   pairsChanged_ = false;
+  if (gapModel) seedReturned();
   if (gapModel) {
     // Each node's major semi-axis [m]; each CP's unit chord and its length, once for the four or so
     // pairs that share it (the same expressions as pair by pair: same bits). The speeds are refit's
@@ -332,10 +398,11 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
             if (apart <= nearest) nearest = apart, remembered = pc.memoMeasure[p];
           }
           if (std::isnan(remembered))
-            remembered = semiAxesAt(f, pr.a, two[q].sA, params_.rule).b + semiAxesAt(f, pr.b, two[q].sB, params_.rule).b;
+            remembered = pc.held ? 0.0
+                                 : semiAxesAt(f, pr.a, two[q].sA, params_.rule).b + semiAxesAt(f, pr.b, two[q].sB, params_.rule).b;
           capMeasure(two[q], remembered);
         }
-        pc.memo = true, pc.side = side, pc.memoPoints = m;
+        pc.memo = true, pc.side = side, pc.memoPoints = m, pc.held = false;
         for (int q = 0; q < m; ++q)
           pc.memoS[q] = two[q].sA, pc.memoT[q] = two[q].sB, pc.memoNormal[q] = two[q].normal,
           pc.memoMeasure[q] = two[q].hA + two[q].hB;
@@ -463,7 +530,7 @@ int CollisionStage::flatten(Fabric& f, int maxPasses, Real bodyDt) {
         flattenCP(f, tangent_, c.cpA, c.normal, dA, params_, flatBefore_, dirSum_);
         flattenCP(f, tangent_, c.cpB, c.normal, dB, params_, flatBefore_, dirSum_);
       } else {  // the gap model measures at the contact point: flatten there
-        const bool thickness = c.kind == ContactKind::Cross && crossesSteeply(f, c);
+        const bool thickness = measuresThickness(f, c);
         flattenAt(f, tangent_, c.cpA, c.sA, c.hDir, thickness, dA, params_, flatBefore_, dirSum_);
         flattenAt(f, tangent_, c.cpB, c.sB, Vec3(-c.hDir), thickness, dB, params_, flatBefore_, dirSum_);
       }
@@ -580,13 +647,16 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt, Real horizon) {
   const bool penalty = params_.response == Response::Penalty;
   if (springs) restoreSections(f);
   againStale_ = true;  // new contacts: resolveAgain marks them afresh
+  passMove_.assign(f.pos.size(), 0.0);
   refit(f, horizon);
   stats.seconds[0] += since(t);
+  trackCrossings(f);
   if (params_.yarnContacts) broad(f);
   else pairs_.clear();
   stats.seconds[1] += since(t);
   if (params_.yarnContacts) narrow(f, horizon);
   else contacts_.clear();
+  measureCrossings(f, horizon, true);
   narrowBodies(f, horizon);
   stats.seconds[2] += since(t);
 
@@ -595,6 +665,9 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt, Real horizon) {
   stats.flattened = 0;
   stats.flattenPasses = flattens ? flatten(f, params_.flattenPasses, horizon) : 0;
   checkOverlaps(f, dt);
+  // The node travel the projection's first sweep bounds each gap by (PositionProjection): a check's
+  // moves are not counted in it, so after one every contact is measured.
+  passMoveValid_ = stats.check.pushed == 0;
   // Overlap after flattening and the check (what none of flattening, the last projection and the
   // check removed): its largest and mean values over the contacts in overlap, and sums for the
   // mean over time.
@@ -634,7 +707,12 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt, Real horizon) {
   stats.correctionEnergy = 0;
   Real added = 0;
   if (!penalty) {
-    law_.resolve(f, contacts_, capacityOf(f), dt, params_, stats.impulses, bodyContacts_, &bodies, horizon);
+    law_.resolve(f, contacts_, capacityOf(f), dt, params_, stats.impulses, bodyContacts_, &bodies, horizon,
+                 std::getenv("WOVEN_ALLROWS") ? nullptr : markRowable(f, horizon));
+    if (!crossings_.empty()) {  // the crossings' impulses: the next step's warm start
+      law_.contactImpulses(contacts_.size(), impulses_);
+      crossings_.keepImpulses(contacts_, impulses_);
+    }
     bodyWork_ += stats.impulses.bodyWork;
     frictionWork_ += stats.impulses.frictionWork;
     added += stats.impulses.energyChange;
@@ -724,18 +802,16 @@ Real CollisionStage::resolveAgain(Fabric& f, Real dt, Real horizonLeft) {
     for (Index i = 0; i < f.nNodes(); ++i) nearFast_[i] = !slowNode_[i];
     for (const BodyContact& c : bodyContacts_) nearFast_[f.elem0[c.cp]] = nearFast_[f.elem0[c.cp] + 1] = 1;
     again_.resize(static_cast<std::size_t>(nc));
-    const auto nodes = [&](const CPContact& c) {
-      const Index a = f.elem0[c.cpA], b = f.elem0[c.cpB];
-      return std::array<Index, 4>{a, a + 1, b, b + 1};
-    };
+    Index node[kMaxStencil];
+    Real w[kMaxStencil];
     for (int ring = 0; ring < 2; ++ring) {
       if (ring == 1)  // the first ring's nodes
         for (Index k = 0; k < nc; ++k)
           if (again_[k])
-            for (Index i : nodes(contacts_[k])) nearFast_[i] = 1;
+            for (int q = 0, n = contactStencil(f, contacts_[k], node, w); q < n; ++q) nearFast_[node[q]] = 1;
       for (Index k = 0; k < nc; ++k) {
-        const auto q = nodes(contacts_[k]);
-        again_[k] = nearFast_[q[0]] | nearFast_[q[1]] | nearFast_[q[2]] | nearFast_[q[3]];
+        const int n = contactStencil(f, contacts_[k], node, w);
+        again_[k] = std::any_of(node, node + n, [&](Index i) { return nearFast_[i] != 0; });
       }
     }
   }
@@ -751,16 +827,57 @@ Real CollisionStage::resolveAgain(Fabric& f, Real dt, Real horizonLeft) {
     if (!f.alive[c.cp]) c.gap = INFINITY;
     else remeasureBody(f, bodies[c.body], c);
   }
+  // The rows of the pass's contacts that could close within its horizon (markRowable), of those
+  // solved again.
+  const std::uint8_t* rows = rowable_.size() == contacts_.size() && params_.model == ContactModel::Gap ? rowable_.data() : nullptr;
+  if (rows && again) {
+    rowAgain_.resize(contacts_.size());
+    for (Index k = 0; k < nc; ++k) rowAgain_[k] = rows[k] & again[k];
+    rows = rowAgain_.data();
+  } else if (again) {
+    rows = again;
+  }
   ImpulseReport rep;
-  law_.resolve(f, contacts_, capacityOf(f), dt, params_, rep, bodyContacts_, &bodies, horizonLeft, again);
+  law_.resolve(f, contacts_, capacityOf(f), dt, params_, rep, bodyContacts_, &bodies, horizonLeft, rows);
   bodyWork_ += rep.bodyWork;
   frictionWork_ += rep.frictionWork;
   stats.seconds[3] += since(t);
   return rep.energyChange;
 }
 
+// The contacts that can close their gap within the horizon (gap <= margin + horizon x the fastest
+// approach their nodes' speeds allow) get rows (model Gap; the paper's rows decide by their own
+// test). The others are listed for the position projection alone (their reach includes what it
+// may move: narrow), where a row would hold lambda = 0 through every sweep: the side-by-side
+// neighbours of a tight weave, 30-80 um apart, were half the rows of the default impact.
+const std::uint8_t* CollisionStage::markRowable(const Fabric& f, Real horizon) {
+  if (params_.model != ContactModel::Gap) return nullptr;
+  const Index nc = static_cast<Index>(contacts_.size());
+  rowable_.resize(contacts_.size());
+  parallelFor(nc, kParallelGrain, threads(), [&](Index k) {
+    const CPContact& c = contacts_[k];
+    const Real approach = c.kind == ContactKind::Crossing ? fastestNear(f, c.cpA) + fastestNear(f, c.cpB)
+                                                          : speed_[c.cpA] + speed_[c.cpB];
+    rowable_[k] = c.gap <= params_.margin + horizon * approach;
+  });
+  return rowable_.data();
+}
+
+// The fastest node of CP e and its neighbours in its yarn (the nodes a curve on e reads) [m/s].
+Real CollisionStage::fastestNear(const Fabric& f, Index e) const {
+  const Yarn& y = f.yarns[f.elemYarn[e]];
+  Real v = speed_[e];
+  if (e > y.firstElem) v = std::max(v, speed_[e - 1]);
+  if (e + 1 < y.firstElem + y.nElems) v = std::max(v, speed_[e + 1]);
+  return v;
+}
+
 Real CollisionStage::afterDrift(Fabric& f, Real dt, bool restitute, bool project) {
   const ThreadCountScope threadCount(params_.threads);
+  // The nodes' travel since the pass measured its contacts (each substep's drift, before the
+  // restitution pass changes the velocities it drifted with).
+  if (passMove_.size() == f.pos.size())
+    parallelFor(f.nNodes(), kParallelGrain, threads(), [&](Index k) { passMove_[k] += dt * f.vel[k].norm(); });
   for (RigidBody& b : bodies) {
     b.pos += dt * b.vel;
     const Real angle = b.angVel.norm() * dt;  // YADE's rotation of a spherical body over the step
@@ -774,7 +891,8 @@ Real CollisionStage::afterDrift(Fabric& f, Real dt, bool restitute, bool project
   if (const int sweeps = params_.projectionSweepCount(); sweeps > 0) {
     auto t = Clock::now();
     projector_.project(f, contacts_, bodyContacts_, bodies, capacityOf(f), sweeps, params_.projectionSlop,
-                       params_.projectionMaxMove, params_.rule, dt, stats.projection, params_.sweepOrder);
+                       params_.projectionMaxMove, params_.rule, dt, stats.projection, params_.sweepOrder, -1,
+                       passMoveValid_ && passMove_.size() == f.pos.size() ? passMove_.data() : nullptr);
     projectionEnergy_ += stats.projection.energy;
     stats.projectionEnergy += stats.projection.energy;
     stats.seconds[4] += since(t);
@@ -830,6 +948,7 @@ Real CollisionStage::overlap(Fabric& f) {
   probe.refit(f, 0);
   probe.broad(f);
   probe.narrow(f, 0);
+  probe.measureCrossings(f, 0, false);
   Real worst = 0;
   for (const CPContact& c : probe.contacts_) worst = std::max(worst, -c.gap);
   f.secDir = dirs;

@@ -17,6 +17,7 @@
 #include "collider/SweepAndPrune.hpp"
 #include "collider/YarnTreeCollider.hpp"
 #include "dynamics/ChainDynamics.hpp"
+#include "engine/CrossingContacts.hpp"
 #include "geom/CPContact.hpp"
 #include "geom/GapFunction.hpp"
 #include "law/ImpulseLaw.hpp"
@@ -69,6 +70,7 @@ struct CollisionStats {
   /// left of the last projection's allowance (the overlaps above are measured after the check).
   Real maxChecked = 0;
   Real maxBodyPenetration = 0;  ///< [m]
+  CrossingCounts crossings;   ///< the persistent crossings (ContactParams::crossings Persistent)
   long maxUnresolved = 0;     ///< most unresolved impulse rows in one step
   Real maxResidual = 0;       ///< [m/s]
   /// wall time in refit, broad, narrow, respond (bodies included) and the position projection after
@@ -142,7 +144,7 @@ class CollisionStage : public StepHook {
   /// Forgets the carried contacts (ContactParams::cacheDistance): every pair is tested at the next
   /// step. Called when a state is saved or loaded, so that a run continued from a saved state and
   /// the run that saved it go on bit for bit alike.
-  void invalidateCache() { cache_.clear(), memo_.clear(), cachePairs_.clear(), forgetHeld_ = true; }
+  void invalidateCache();
   /// Largest overlap of body k with any CP in the fabric as it stands [m] (<= 0: clear of it); moves
   /// nothing.
   Real bodyOverlap(Fabric& f, int k);
@@ -158,6 +160,8 @@ class CollisionStage : public StepHook {
   Real overlap(Fabric& f);
 
   const std::vector<CPContact>& contacts() const { return contacts_; }
+  /// The persistent crossings (empty unless ContactParams::persistentCrossings()).
+  const CrossingContacts& crossings() const { return crossings_; }
   const std::vector<OBB>& bounds() const { return bounds_; }
   const std::vector<CPPair>& candidates() const { return pairs_; }
   /// Refits the bounds and lists the candidate pairs of the given broad phase at the current state
@@ -178,11 +182,20 @@ class CollisionStage : public StepHook {
   }
   void broad(const Fabric& f);
   void narrow(const Fabric& f, Real dt);
+  /// The persistent crossings' part of a pass: tracked before the broad phase (trackCrossings),
+  /// formed from the general contacts and measured after the narrow phase (measureCrossings).
+  void trackCrossings(const Fabric& f);
+  void measureCrossings(const Fabric& f, Real dt, bool formNew);
+  void seedReturned();
   // A pair's memory (model Gap; kept while the broad phase keeps the pair, forgotten with the cache):
   // its kind (Side / Cross hysteresis), the side its normal points to, and the measure its sections
   // claimed (GapFunction.hpp, capMeasure). Apart from PairCache: small, and only this is remapped.
   struct PairMemo {
     bool memo = false, side = false;
+    // Returned by a persistent crossing and not measured since: a point without a remembered
+    // measure may claim only the room its axes leave (capMeasure at 0), so that the chords taking
+    // over from the crossing's curves do not start in an overlap the curves did not have.
+    bool held = false;
     // Its contact points at the last narrow phase that measured it (1 or 2; 0: measure forgotten,
     // the pair was not measured since its boxes parted): their places sA, sB, the normal and the
     // sections' measure hA + hB [m] at each.
@@ -207,6 +220,7 @@ class CollisionStage : public StepHook {
   void measureBodies(const Fabric& f, Real dt);
   std::function<Real(const CPContact&)> capacityOf(const Fabric& f) const;
   bool crossesSteeply(const Fabric& f, const CPContact& c) const;
+  bool measuresThickness(const Fabric& f, const CPContact& c) const;
   Real capacityOne(const Fabric& f, const CPContact& c, bool sideB, const std::vector<Real>* flat = nullptr) const;
   void restoreSections(Fabric& f);
   Real addSectionSprings(const Fabric& f);
@@ -254,6 +268,14 @@ class CollisionStage : public StepHook {
   bool pairsChanged_ = false;
   std::vector<std::uint8_t> slowNode_, nearFast_, again_;  // resolveAgain: slow nodes, the marks, the contacts solved
   bool againStale_ = true;                                 // again_ not yet marked for this pass's contacts
+  CrossingContacts crossings_;
+  std::vector<std::uint8_t> renew_;  // per CP: its pairs return to the general pipeline (a crossing left it)
+  std::vector<Real> impulses_;       // per contact: its row's impulse after the solve (the crossings' warm start)
+  std::vector<std::uint8_t> rowable_, rowAgain_;  // per contact: it can close its gap within the step (markRowable)
+  std::vector<Real> passMove_;         // per node: its travel since the pass measured the contacts [m]
+  bool passMoveValid_ = false;         // ... and no check moved a node in between
+  const std::uint8_t* markRowable(const Fabric& f, Real horizon);
+  Real fastestNear(const Fabric& f, Index e) const;
   ImpulseLaw law_;
   PositionProjection projector_;
   Real projectionEnergy_ = 0;

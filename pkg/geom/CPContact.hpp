@@ -25,8 +25,10 @@ enum class SectionLine : std::uint8_t {
 SectionLine sectionSurfaceAlong(const Fabric& f, Index e, const Vec3& p, const Vec3& m, SectionRule rule, Real& lambda);
 
 /// Which gap function measured a contact (geom/GapFunction.hpp): the paper's box normal with the
-/// depth on the sections (contact model `paper`), or the gap model's crossing / side-by-side forms.
-enum class ContactKind : std::uint8_t { Paper = 0, Cross = 1, Side = 2 };
+/// depth on the sections (contact model `paper`), the gap model's crossing / side-by-side forms of
+/// a CP pair, or a persistent crossing of two yarns (engine/CrossingContacts: the points are its
+/// sliding coordinates, held for the step).
+enum class ContactKind : std::uint8_t { Paper = 0, Cross = 1, Side = 2, Crossing = 3 };
 
 /// A side-by-side point (geom/GapFunction.hpp): an end of A's axis with the closest point of B to it
 /// (A), an end of B's axis with the closest point of A to it (B), or the axes' closest approach
@@ -58,6 +60,10 @@ struct CPContact {
   Vec3 hDir = Vec3::UnitZ();     ///< gap model: the direction they are measured (and flattened) along (GapFunction.hpp)
   /// Gap model, side by side: which material point the contact holds as the pieces slide (remeasure).
   SideAnchor anchor = SideAnchor::A;
+  /// Kind Crossing: the persistent crossing it measures (engine/CrossingContacts), else -1.
+  Index crossing = -1;
+  /// Normal impulse its row starts from [N s] (a persistent crossing's last one: warm start).
+  Real warm = 0;
 };
 
 /// Static contact of CPs a < b: true (and `out`) when their boxes overlap. The boxes give the normal

@@ -2,6 +2,7 @@
 #include "shape/Cylinder.hpp"
 #include "bound/CPBound.hpp"
 #include "geom/SegmentDistance.hpp"
+#include "geom/YarnCurve.hpp"
 #include <algorithm>
 #include <cmath>
 
@@ -273,9 +274,54 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
   return 1;
 }
 
+namespace {
+// The crossing's g at its held places: the curves' points, the normal on the remembered side (the
+// curves cannot pass each other's ends: the crossing hands itself back first), and with `sections`
+// the half-thicknesses at the places, capped by c.hCap (the measure memory), else the held ones.
+void measureCrossing(const Fabric& f, CPContact& c, SectionRule rule, bool sections) {
+  const CurvePoint A = yarnCurveAt(f, c.cpA, c.sA), B = yarnCurveAt(f, c.cpB, c.sB);
+  const Vec3 d = B.x - A.x;
+  const Real len = d.norm();
+  Real r = 0;
+  if (len > kTinyDistance) {
+    const bool through = d.dot(c.normal) < 0;  // the axes have passed through each other
+    c.normal = through ? Vec3(-d / len) : Vec3(d / len), r = through ? -len : len;
+  }
+  if (sections) {
+    c.hDir = supportDirection(c.normal, A.d1.normalized(), B.d1.normalized(), false);
+    c.hA = semiAxesAt(f, c.cpA, c.sA, rule).b, c.hB = semiAxesAt(f, c.cpB, c.sB, rule).b;
+    const Real H = c.hA + c.hB;
+    c.hHeld = H > c.hCap ? H - c.hCap : 0.0;
+    if (H > c.hCap) c.hA *= c.hCap / H, c.hB *= c.hCap / H;
+  }
+  c.gap = r - c.hA - c.hB;
+  c.point = A.x + (c.hA + 0.5 * c.gap) * c.normal;  // half way between the two surfaces
+}
+}  // namespace
+
+void crossingGap(const Fabric& f, Index a, Real s, Index b, Real t, SectionRule rule, const Vec3& orient,
+                 CPContact& out) {
+  out = CPContact();
+  out.cpA = a, out.cpB = b, out.sA = s, out.sB = t, out.kind = ContactKind::Crossing;
+  out.normal = orient, out.sectional = true;
+  measureCrossing(f, out, rule, true);
+}
+
+int contactStencil(const Fabric& f, const CPContact& c, Index node[kMaxStencil], Real w[kMaxStencil]) {
+  if (c.kind == ContactKind::Crossing) {
+    const int m = yarnCurveWeights(f, c.cpA, c.sA, node, w);
+    for (int k = 0; k < m; ++k) w[k] = -w[k];
+    return m + yarnCurveWeights(f, c.cpB, c.sB, node + m, w + m);
+  }
+  node[0] = f.elem0[c.cpA], node[1] = node[0] + 1, node[2] = f.elem0[c.cpB], node[3] = node[2] + 1;
+  w[0] = -(1 - c.sA), w[1] = -c.sA, w[2] = 1 - c.sB, w[3] = c.sB;
+  return 4;
+}
+
 void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections, const Vec3Array* tangent) {
   const Index i = f.elem0[c.cpA], j = f.elem0[c.cpB];
   Real s = c.sA, t = c.sB;
+  if (c.kind == ContactKind::Crossing) return measureCrossing(f, c, rule, sections);  // its places held
   if (c.kind == ContactKind::Side && c.anchor == SideAnchor::A) {
     t = alongCP(f, c.cpB, (1 - s) * f.pos[i] + s * f.pos[i + 1]);
   } else if (c.kind == ContactKind::Side && c.anchor == SideAnchor::B) {

@@ -49,6 +49,19 @@
 //          the node, the direction to the round cylinder's closest point) the one that leaves the
 //          section the most room; g_k = min over the part of y.n_k (exact) - (x_k.n_k + support_k);
 //          the same rows as the box.
+//   Crossing a persistent crossing of two yarns (engine/CrossingContacts): g = |C_B(t) - C_A(s)|
+//          - h_A - h_B between the yarns' smooth lines (geom/YarnCurve.hpp: the chains with their
+//          corners rounded over a short blend), at the crossing's sliding coordinates (s, t):
+//          state, held for the step and moved between steps to the lines' closest points. At rest
+//          they lie at a crossing node of each yarn. For fixed (s, t), dg/dx_k = w_k n exactly,
+//          w the lines' node weights (contactStencil: two or three nodes a yarn, a convex
+//          combination); and since (s, t) are the closest points, moving them to the next step's
+//          changes g only to second order (the envelope theorem), where the kinked chords'
+//          distance turns by the crimp angle as a point passes a node. One contact stands for the
+//          crossing where four chord pairs' contacts did, each about 16 um off the node (the
+//          minimum over the kinked chords, which jumped between them; the rounded lines read it to
+//          within 1 % of the thickness at a built crossing). It keeps its side at any (s, t) and
+//          measures the half-thicknesses (it lives above 45 degrees).
 // A pair of CPs is Cross or Side by the angle between the axes with hysteresis (enter Side below
 // kSideEnterDeg, leave above kSideLeaveDeg), never by the instantaneous normal. Orientation: a pair
 // remembers its normal, and where the axes have passed through each other (the vector between the
@@ -118,6 +131,19 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
 /// the pair apart with energy no force had given. A section that would turn into its neighbour is
 /// held by it (the rows and the projection still act on g = r - hA - hB, with the capped measure).
 void capMeasure(CPContact& c, Real remembered);
+
+/// The persistent crossing's contact (kind Crossing): the curves' points on CP a at s and CP b at t
+/// (a < b; held for the step), the normal kept on `orient`'s side, the half-thicknesses there as
+/// the sections' measure (uncapped: capMeasure applies the crossing's memory after).
+void crossingGap(const Fabric& f, Index a, Real s, Index b, Real t, SectionRule rule, const Vec3& orient,
+                 CPContact& out);
+
+/// Most nodes a contact's gap reads: a persistent crossing's two lines, three nodes each.
+constexpr int kMaxStencil = 6;
+/// The nodes of contact c's gap and their weights: dg/dx_k = w_k n (A's negative, B's positive).
+/// A CP pair: its four nodes with the barycentric weights (1 - sA, sA, 1 - sB, sB); a persistent
+/// crossing: the two lines' weights (YarnCurve.hpp), two or three nodes each. Returns the count.
+int contactStencil(const Fabric& f, const CPContact& c, Index node[kMaxStencil], Real w[kMaxStencil]);
 
 /// Measures contact c again at the current positions: closest points (Cross, and a Side pair's
 /// closest-approach point), B's closest point to the fixed A(sA) or A's closest point to the fixed

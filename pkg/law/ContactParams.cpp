@@ -11,6 +11,14 @@ ContactModel contactModelByName(const std::string& name) {
                        "'gap' (gap functions, exact gradient rows, position projection) or 'paper' (Sections 4-5)");
 }
 
+Crossings crossingsByName(const std::string& name) {
+  if (name == "persistent") return Crossings::Persistent;
+  if (name == "chords") return Crossings::Chords;
+  throw ParameterError("crossings", "'" + name + "'",
+                       "'persistent' (one contact per crossing, carried between steps) or 'chords' (every CP pair "
+                       "measured afresh: four chord-pair contacts per crossing)");
+}
+
 SweepOrder sweepOrderByName(const std::string& name) {
   if (name == "coloured") return SweepOrder::Coloured;
   if (name == "sequential") return SweepOrder::Sequential;
@@ -45,6 +53,8 @@ void ContactParams::validate() const {
   require(std::isfinite(skin) && skin >= 0, "skin", skin, "[0, inf) m");
   require(std::isfinite(tolerance) && tolerance > 0, "tolerance", tolerance, "(0, inf) m/s");
   require(maxIterations >= 1, "max_iterations", maxIterations, "[1, inf)");
+  require(std::isfinite(solverTolerance) && solverTolerance >= 0 && solverTolerance <= 1e-3, "solver_tolerance",
+          solverTolerance, "[0, 1e-3] m (0: the tolerance in m/s alone)");
   require(flattenPasses >= 1, "flatten_passes", flattenPasses, "[1, inf)");
   require(std::isfinite(positionCorrection) && positionCorrection >= 0 && positionCorrection <= 1,
           "position_correction", positionCorrection, "[0, 1]");
@@ -59,6 +69,7 @@ void ContactParams::validate() const {
   require(static_cast<int>(response) <= 1, "response", static_cast<int>(response), "'impulse' or 'penalty'");
   require(static_cast<int>(flattening) <= 2, "flattening", static_cast<int>(flattening), "'geometric', 'none' or 'springs'");
   require(static_cast<int>(model) <= 1, "contact_model", static_cast<int>(model), "'gap' or 'paper'");
+  require(static_cast<int>(crossings) <= 1, "crossings", static_cast<int>(crossings), "'persistent' or 'chords'");
   require(!(response == Response::Penalty && friction > 0), "friction", friction,
           "0 with response 'penalty' (Coulomb friction acts in the impulse rows only); [0, 2] with response 'impulse'");
   require(!(response == Response::Penalty && bodyFriction > 0), "body_friction", bodyFriction,

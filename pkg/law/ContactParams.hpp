@@ -41,6 +41,17 @@ enum class SweepOrder : std::uint8_t {
   /// per sweep instead of one per colour.
   Blocked = 2
 };
+/// How the gap model measures where two yarns cross (docs/collisions.md, "Persistent crossings").
+enum class Crossings : std::uint8_t {
+  /// One persistent contact per crossing, carried from step to step on the yarns' smooth centre
+  /// lines (engine/CrossingContacts); its chord pairs never reach the general pipeline (the default).
+  Persistent = 0,
+  /// Every CP pair measured afresh each step by the general pipeline: four chord-pair contacts per
+  /// crossing at one CP per span (the model before persistent crossings).
+  Chords = 1
+};
+/// "persistent" or "chords"; throws ParameterError("crossings") otherwise.
+Crossings crossingsByName(const std::string& name);
 /// "coloured", "sequential" or "blocked"; throws ParameterError("sweep_order") otherwise.
 SweepOrder sweepOrderByName(const std::string& name);
 /// "gap" or "paper"; throws ParameterError("contact_model") otherwise.
@@ -84,7 +95,13 @@ struct ContactParams {
   /// while every CP's box (grown by its motion in the step) stays inside its box of the last broad
   /// phase; 0 runs the broad phase every step. The pairs found are the same either way.
   Real skin = 5e-6;
-  Real tolerance = 1e-6;      ///< Eq. 4 resting band and solver tolerance on normal velocity [m/s] > 0
+  Real tolerance = 1e-6;      ///< Eq. 4 resting band on normal velocity [m/s] > 0 (and the solve's least tolerance)
+  /// The impulse solve's own tolerance [m] in [0, 1e-3]: the sweeps stop once no row's miss errs
+  /// the drift of the step by more than this (a miss of solverTolerance / dt, and never less than
+  /// `tolerance`); rows over it are the unresolved ones. 1 nm: 0.2 % of the projection's slop, so
+  /// what a row misses takes hundreds of steps to reach what the projection takes out. 0: the
+  /// tolerance alone (1e-6 m/s, 7e-14 m a step at the default ballistic step).
+  Real solverTolerance = 1e-9;
   int maxIterations = 50;     ///< bound on the impulse iterations per step, >= 1
   int flattenPasses = 4;      ///< re-tests of flattened contacts per step (paper's "go to steps 1 and 2"), >= 1
   /// Model Paper: fraction in [0, 1] of a residual (locked) overlap removed per step by moving the nodes apart
@@ -125,6 +142,14 @@ struct ContactParams {
   /// filaments rearrange far more easily than a solid section compresses (not calibrated: the
   /// paper gives no k_i).
   Real sectionStiffness = 1e4;
+  /// Where two yarns cross (model Gap; the paper model measures every pair its own way).
+  Crossings crossings = Crossings::Persistent;
+  /// Whether these parameters keep persistent crossings: the gap model's impulses (penalty forces
+  /// and section springs act on CP pairs' four nodes: law/NormalForces), yarn contacts on.
+  bool persistentCrossings() const {
+    return crossings == Crossings::Persistent && model == ContactModel::Gap && response == Response::Impulse &&
+           flattening != Flattening::Springs && yarnContacts;
+  }
 
   /// Throws ParameterError naming the parameter and its allowed range.
   void validate() const;

@@ -1,5 +1,6 @@
 #include "law/ImpulseLaw.hpp"
 #include "core/Parallel.hpp"
+#include "geom/GapFunction.hpp"
 #include "fabric/SpringEnergy.hpp"
 #include <algorithm>
 #include <chrono>
@@ -8,21 +9,21 @@
 namespace woven {
 
 namespace {
-// Row layout of a contact: A's nodes with negative weights, B's with positive (vn = (vB - vA).n).
-void nodesAndWeights(const Fabric& f, const CPContact& c, Index node[4], Real w[4]) {
-  node[0] = f.elem0[c.cpA], node[1] = node[0] + 1, node[2] = f.elem0[c.cpB], node[3] = node[2] + 1;
-  w[0] = -(1 - c.sA), w[1] = -c.sA, w[2] = 1 - c.sB, w[3] = c.sB;
+// A row's layout is its contact's stencil (GapFunction's contactStencil): A's nodes with negative
+// weights, B's with positive (vn = (vB - vA).n); four for a CP pair, two to eight for a persistent
+// crossing.
+inline Vec3 relativeVelocity(const Fabric& f, const Index* node, const Real* w, int n) {
+  Vec3 v = w[0] * f.vel[node[0]];
+  for (int k = 1; k < n; ++k) v += w[k] * f.vel[node[k]];
+  return v;
 }
-inline Vec3 relativeVelocity(const Fabric& f, const Index node[4], const Real w[4]) {
-  return w[0] * f.vel[node[0]] + w[1] * f.vel[node[1]] + w[2] * f.vel[node[2]] + w[3] * f.vel[node[3]];
-}
-inline void applyImpulse(Fabric& f, const Index node[4], const Real w[4], const Vec3& J) {
-  for (int k = 0; k < 4; ++k) f.vel[node[k]] += (w[k] * f.invMass[node[k]]) * J;
+inline void applyImpulse(Fabric& f, const Index* node, const Real* w, int n, const Vec3& J) {
+  for (int k = 0; k < n; ++k) f.vel[node[k]] += (w[k] * f.invMass[node[k]]) * J;
 }
 }  // namespace
 
 Vec3 ImpulseLaw::rowVelocity(const Fabric& f, const Row& r) const {
-  Vec3 v = relativeVelocity(f, r.node, r.w);
+  Vec3 v = relativeVelocity(f, r.node, r.w, r.n);
   if (r.body >= 0) {
     const BodyVelocity& b = bodyVel_[r.body];
     v += b.v + b.w.cross(r.arm);
@@ -31,7 +32,7 @@ Vec3 ImpulseLaw::rowVelocity(const Fabric& f, const Row& r) const {
 }
 
 void ImpulseLaw::applyRow(Fabric& f, const Row& r, const Vec3& J) {
-  applyImpulse(f, r.node, r.w, J);
+  applyImpulse(f, r.node, r.w, r.n, J);
   if (r.body >= 0) {
     BodyVelocity& b = bodyVel_[r.body];
     b.v += b.invM * J;
@@ -60,7 +61,7 @@ Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies) {
   for (const Row& r : rows_)
     if (r.body >= 0 && !(*bodies)[r.body].dynamic()) {
       const BodyVelocity& b = bodyVel_[r.body];
-      work += -(r.lambda * r.n + r.lambdaT).dot(b.v + b.w.cross(r.arm));
+      work += -(r.lambda * r.normal + r.lambdaT).dot(b.v + b.w.cross(r.arm));
     }
   return work;
 }
@@ -70,6 +71,9 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
                          std::vector<RigidBody>* bodies, Real horizon, const std::uint8_t* only) {
   rep = ImpulseReport{};
   const Real H = horizon > 0 ? horizon : dt;  // the drift the rooms are shared over
+  // The solve's own tolerance: a miss that errs the drift by at most solverTolerance [m] (and never
+  // below Eq. 4's band).
+  solverTol_ = std::max(p.tolerance, p.solverTolerance / H);
   loadBodies(bodies);
   // Which contacts need a row and their rows, each contact on its own (threads; the capacity is the
   // costly part and reads nothing the rows change); then the body rows, one by one.
@@ -84,9 +88,9 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     Row& r = slots_[c];
     hasRow_[c] = 0;
     if (only && !only[c]) return;
-    nodesAndWeights(f, contacts[c], r.node, r.w);
-    r.n = contacts[c].normal;
-    r.vn0 = relativeVelocity(f, r.node, r.w).dot(r.n);
+    r.n = contactStencil(f, contacts[c], r.node, r.w);
+    r.normal = contacts[c].normal;
+    r.vn0 = relativeVelocity(f, r.node, r.w, r.n).dot(r.normal);
     // Approach the room absorbs: the gap, and what flattening can still take, unless the contact is
     // still overlapping after the flattening passes (flattening has stopped working for it).
     const Real gap = contacts[c].gap;
@@ -98,11 +102,13 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
       return;
     }
     Real K = 0;
-    for (int k = 0; k < 4; ++k) K += r.w[k] * r.w[k] * f.invMass[r.node[k]];
+    for (int k = 0; k < r.n; ++k) K += r.w[k] * r.w[k] * f.invMass[r.node[k]];
     if (!(K > 0)) return;  // both CPs kinematic
     r.invK = 1 / K;
     r.target = -allowed;
-    r.lambda = 0, r.lambdaT.setZero(), r.body = -1, r.arm.setZero();
+    // A persistent crossing's row starts from its last impulse (the warm start; applied below).
+    r.lambda = contacts[c].warm > 0 ? contacts[c].warm : 0.0, r.lambdaT.setZero(), r.body = -1, r.arm.setZero();
+    r.contact = c;
     hasRow_[c] = 1;
   });
   yarnRows_.clear();
@@ -111,16 +117,16 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   bodyRows_.clear();
   for (const BodyContact& c : bodyContacts) {
     Row r;
-    r.node[0] = f.elem0[c.cp], r.node[1] = r.node[0] + 1, r.node[2] = r.node[3] = r.node[0];
-    r.w[0] = -(1 - c.s), r.w[1] = -c.s, r.w[2] = r.w[3] = 0;
-    r.n = c.normal;
+    r.node[0] = f.elem0[c.cp], r.node[1] = r.node[0] + 1, r.n = 2;
+    r.w[0] = -(1 - c.s), r.w[1] = -c.s;
+    r.normal = c.normal;
     r.body = c.body;
     r.arm = c.point - (*bodies)[c.body].pos;
-    r.vn0 = rowVelocity(f, r).dot(r.n);
+    r.vn0 = rowVelocity(f, r).dot(r.normal);
     const Real allowed = std::max(c.gap, Real(0)) / H;
     if (!everyContact && !(r.vn0 < -allowed - p.tolerance)) continue;
     const BodyVelocity& b = bodyVel_[c.body];
-    const Vec3 rn = r.arm.cross(r.n);
+    const Vec3 rn = r.arm.cross(r.normal);
     Real K = b.invM + rn.dot(b.invI * rn);
     for (int k = 0; k < 2; ++k) K += r.w[k] * r.w[k] * f.invMass[r.node[k]];
     if (!(K > 0)) continue;  // kinematic CP and body
@@ -155,43 +161,58 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   touched_.clear();
   marked_.resize(f.nNodes(), 0);
   for (const Row& r : rows_)
-    for (int k = 0; k < 4; ++k)
+    for (int k = 0; k < r.n; ++k)
       if (!marked_[r.node[k]]) marked_[r.node[k]] = 1, touched_.push_back(r.node[k]);
   for (Index i : touched_) marked_[i] = 0;
   dt_ = dt;
   keepVelocities(f);
+  // Warm start (Catto; Box2D): the rows of persistent crossings apply their last step's impulse
+  // before the sweeps, which then correct it (lambda >= 0 accumulated as from 0). In row order, one
+  // thread: a node's sum of impulses in a fixed order.
+  for (const Row& r : rows_)
+    if (r.lambda > 0) applyRow(f, r, r.lambda * r.normal);
 
   const bool friction = p.friction > 0 || p.bodyFriction > 0;
   if (friction)
     parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
       Row& r = rows_[k];
       r.kick.setZero();
-      for (int q = 0; q < 4; ++q) r.kick += (0.5 * dt * r.w[q] * f.invMass[r.node[q]]) * f.force[r.node[q]];
+      for (int q = 0; q < r.n; ++q) r.kick += (0.5 * dt * r.w[q] * f.invMass[r.node[q]]) * f.force[r.node[q]];
       r.frictionTaken = 0;
     });
   rep.iterations = solve(f, p, friction);
+  rep.skipped = skipped_;
   if (friction)
     for (const Row& r : rows_) rep.frictionWork += r.frictionTaken;
   parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
     const Row& r = rows_[k];
-    const Real vn = rowVelocity(f, r).dot(r.n);
+    const Real vn = rowVelocity(f, r).dot(r.normal);
     miss_[k] = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
   });
   // The largest miss and the rows missing by more than the tolerance, per fixed chunk (a maximum and
   // a count: exact in any order).
   struct Misses {
     Real worst = 0;
-    long over = 0;
-    Misses& operator+=(const Misses& o) { return worst = std::max(worst, o.worst), over += o.over, *this; }
+    long over = 0, overBand = 0;
+    Misses& operator+=(const Misses& o) {
+      return worst = std::max(worst, o.worst), over += o.over, overBand += o.overBand, *this;
+    }
   };
   const Misses misses = chunkedSum(static_cast<Index>(miss_.size()), 4096, threads(), Misses{}, [&](Index k0, Index k1) {
     Misses m;
-    for (Index k = k0; k < k1; ++k) m.worst = std::max(m.worst, miss_[k]), m.over += miss_[k] > p.tolerance;
+    for (Index k = k0; k < k1; ++k)
+      m.worst = std::max(m.worst, miss_[k]), m.over += miss_[k] > solverTol_, m.overBand += miss_[k] > p.tolerance;
     return m;
   });
-  rep.residual = misses.worst, rep.unresolved = misses.over;
+  rep.residual = misses.worst, rep.unresolved = misses.over, rep.unresolvedBand = misses.overBand;
   rep.energyChange = energyChange(f, false);
   rep.bodyWork = storeBodies(bodies);
+}
+
+void ImpulseLaw::contactImpulses(std::size_t contacts, std::vector<Real>& out) const {
+  out.assign(contacts, 0.0);
+  for (const Row& r : rows_)
+    if (r.contact >= 0 && static_cast<std::size_t>(r.contact) < contacts) out[r.contact] = r.lambda;
 }
 
 void ImpulseLaw::keepVelocities(const Fabric& f) {
@@ -247,8 +268,8 @@ void ImpulseLaw::colourRows(const Fabric& f, Index n, SweepOrder order, RowAt&& 
   const auto nodesOf = [&](Index r, Index* node) {
     const Row& q = rowAt(r);
     if (q.body >= 0) return -1;  // all of a body's rows share it
-    for (int k = 0; k < 4; ++k) node[k] = q.node[k];
-    return 4;
+    for (int k = 0; k < q.n; ++k) node[k] = q.node[k];
+    return q.n;
   };
   if (order == SweepOrder::Blocked) {
     blocking_.build(n, f.pos, nodesOf);
@@ -270,15 +291,15 @@ void ImpulseLaw::colourRows(const Fabric& f, Index n, SweepOrder order, RowAt&& 
 // impulse can give back) [m/s].
 Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool friction) {
   const Vec3 vr = rowVelocity(f, r);
-  const Real vn = vr.dot(r.n);
+  const Real vn = vr.dot(r.normal);
   const Real miss = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
   const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
-  Vec3 J = (lambda - r.lambda) * r.n;
+  Vec3 J = (lambda - r.lambda) * r.normal;
   r.lambda = lambda;
   const Real mu = r.body >= 0 ? p.bodyFriction : p.friction;
   Vec3 Jt = Vec3::Zero();
   if (friction && mu > 0) {  // Coulomb: cancel the tangential slip, within the cone mu * lambda
-    const Vec3 vt = vr - vn * r.n;
+    const Vec3 vt = vr - vn * r.normal;
     Vec3 lt = r.lambdaT - vt * r.invK;
     const Real lim = mu * r.lambda, len = lt.norm();
     if (len > lim) lt *= lim / len;
@@ -295,12 +316,12 @@ Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool fricti
 // solveRow's update of a row on no body while friction between yarns is off, in the same operations:
 // the same bits (measured: the scenes' figures unchanged to the last digit).
 [[gnu::always_inline]] inline Real ImpulseLaw::solveRow(Fabric& f, SweepRow& r) {
-  const Real vn = relativeVelocity(f, r.node, r.w).dot(r.n);
+  const Real vn = relativeVelocity(f, r.node, r.w, r.n).dot(r.normal);
   const Real miss = r.lambda > 0 ? std::abs(vn - r.target) : r.target - vn;
   const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
-  const Vec3 J = (lambda - r.lambda) * r.n;
+  const Vec3 J = (lambda - r.lambda) * r.normal;
   r.lambda = lambda;
-  applyImpulse(f, r.node, r.w, J);
+  applyImpulse(f, r.node, r.w, r.n, J);
   return miss;
 }
 
@@ -329,10 +350,14 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
     parallelFor(nRows, kParallelGrain, nThreads, [&](Index k) {
       const Row& r = rows_[k];
       SweepRow& q = packed_[k];
-      for (int i = 0; i < 4; ++i) q.node[i] = r.node[i], q.w[i] = r.w[i];
-      q.n = r.n, q.target = r.target, q.invK = r.invK, q.lambda = r.lambda, q.body = r.body >= 0;
+      for (int i = 0; i < r.n; ++i) q.node[i] = r.node[i], q.w[i] = r.w[i];
+      q.n = r.n, q.normal = r.normal, q.target = r.target, q.invK = r.invK, q.lambda = r.lambda, q.body = r.body >= 0;
     });
   }
+  // The tail's active set (below): each node's and each row's last update, on one counter.
+  if (nodeWrite_.size() != static_cast<std::size_t>(f.nNodes())) nodeWrite_.assign(f.nNodes(), writes_);
+  rowWrite_.assign(rows_.size(), -1);
+  skipped_ = 0;
   int sweeps = p.maxIterations;
   for (int it = 0; it < p.maxIterations; ++it) {
     const bool split = nThreads > 1 && (it == 0 || (it > 1 && seconds[0] <= seconds[1]));
@@ -369,10 +394,34 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
     else
       for (Index k = 0; k < tail; ++k) worst = std::max(worst, miss_[k]);  // the colours' rows
     for (Index k = tail; k < nRows; ++k) {
-      miss_[k] = packed && !packed_[k].body ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
+      const bool onBody = packed ? packed_[k].body : rows_[k].body >= 0;
+      const Index* node = packed ? packed_[k].node : rows_[k].node;
+      const int n = packed ? packed_[k].n : rows_[k].n;
+      // The serial order's active set: a row whose nodes no other row has changed since its own
+      // last update would only repeat it (its miss was taken to its target, or it separates): it
+      // is skipped, its miss 0. Rows on a body (they share its velocities) are always updated.
+      if (it > 0 && !onBody && std::all_of(node, node + n, [&](Index i) { return nodeWrite_[i] <= rowWrite_[k]; })) {
+        miss_[k] = 0;
+        ++skipped_;
+        continue;
+      }
+      const Real before = packed && !onBody ? packed_[k].lambda : rows_[k].lambda;
+      const Vec3 beforeT = packed ? Vec3::Zero() : rows_[k].lambdaT;
+      miss_[k] = packed && !onBody ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
       worst = std::max(worst, miss_[k]);
+      // An update that moved the row's velocity by less than a thousandth of the tolerance (a
+      // resting row's rounding) wakes none of its neighbours.
+      const Real dLambda = std::abs((packed && !onBody ? packed_[k].lambda : rows_[k].lambda) - before);
+      const Real invK = packed && !onBody ? packed_[k].invK : rows_[k].invK;
+      const bool wrote = onBody || dLambda > 1e-3 * solverTol_ * invK ||
+                         (!packed && (rows_[k].lambdaT - beforeT).norm() > 1e-3 * solverTol_ * invK);
+      if (wrote) {
+        ++writes_;
+        for (int q = 0; q < n; ++q) nodeWrite_[node[q]] = writes_;
+      }
+      rowWrite_[k] = writes_;
     }
-    if (worst <= p.tolerance) {
+    if (worst <= solverTol_) {
       sweeps = it + 1;
       break;
     }
@@ -422,9 +471,9 @@ Real ImpulseLaw::correctPositions(Fabric& f, const std::vector<CPContact>& conta
   for (Index e : elems) before += springEnergy(f, e);
   for (const CPContact& c : contacts) {
     if (!(c.gap < -p.correctionSlop && c.sectional)) continue;
-    Index node[4];
-    Real w[4], K = 0;
-    nodesAndWeights(f, c, node, w);
+    Index node[kMaxStencil];
+    Real w[kMaxStencil], K = 0;
+    contactStencil(f, c, node, w);  // a CP pair of the paper's model: its four nodes
     for (int k = 0; k < 4; ++k) K += w[k] * w[k] * f.invMass[node[k]];
     if (!(K > 0)) continue;
     const Vec3 d = (p.positionCorrection * (-c.gap - p.correctionSlop) / K) * c.normal;  // relative shift along n

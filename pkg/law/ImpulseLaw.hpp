@@ -39,6 +39,7 @@
 #include "fabric/Fabric.hpp"
 #include "geom/BodyContact.hpp"
 #include "geom/CPContact.hpp"
+#include "geom/GapFunction.hpp"
 #include "law/ContactParams.hpp"
 #include "law/RowBlocks.hpp"
 #include "law/RowColouring.hpp"
@@ -47,11 +48,15 @@
 
 namespace woven {
 
+static_assert(kMaxStencil <= kMaxRowNodes, "a row holds every node of its contact's stencil");
+
 struct ImpulseReport {
   long rows = 0;            ///< contacts that received impulses
   int iterations = 0;       ///< Gauss-Seidel sweeps made
   Real residual = 0;        ///< largest miss of a row's target after the last sweep [m/s]
-  long unresolved = 0;      ///< rows still missing their target by more than the tolerance
+  long unresolved = 0;      ///< rows still missing their target by more than the solve's tolerance (ContactParams::solverTolerance)
+  long skipped = 0;         ///< row updates the sweeps skipped (nothing had changed them: the active set)
+  long unresolvedBand = 0;  ///< rows missing their target by more than Eq. 4's band (ContactParams::tolerance)
   Real energyChange = 0;    ///< change of the step's kinetic energy (v_n) the impulses make [J]
   /// Work the rigid bodies did on the fabric [J]: minus their kinetic energy change (dynamic
   /// bodies), the impulse on the fabric times the body's velocity at the point (kinematic ones).
@@ -78,6 +83,11 @@ class ImpulseLaw {
                const ContactParams& p, ImpulseReport& report, const std::vector<BodyContact>& bodyContacts = {},
                std::vector<RigidBody>* bodies = nullptr, Real horizon = 0, const std::uint8_t* only = nullptr);
 
+  /// Each contact's normal impulse after the last resolve() [N s] (0: no row), for `contacts`
+  /// contacts in the order resolve() had them: the persistent crossings' warm start
+  /// (CPContact::warm) at the next step.
+  void contactImpulses(std::size_t contacts, std::vector<Real>& out) const;
+
   /// Pass 2 after the drift: restitution e of the rows of the last resolve() (see above). Returns
   /// the fabric's kinetic energy change [J] (0 for e = 0) and adds the bodies' work to *bodyWork.
   Real restitute(Fabric& f, const ContactParams& p, std::vector<RigidBody>* bodies = nullptr, Real* bodyWork = nullptr);
@@ -93,11 +103,12 @@ class ImpulseLaw {
 
  private:
   struct Row {
-    Index node[4];
-    int body = -1;      // B side: a rigid body (weights w[2], w[3] are 0), at arm r from its centre;
+    Index node[kMaxStencil];
+    int n = 0;          // nodes (GapFunction's contactStencil; 2 on a body)
+    int body = -1;      // B side: a rigid body (the nodes are the CP's two), at arm r from its centre;
                         // beside the nodes: the colouring and the blocks read both, and nothing else
-    Real w[4];          // -(1-sA), -sA, (1-sB), sB: vn = sum w_k v_k . n
-    Vec3 n;
+    Real w[kMaxStencil];  // the stencil's weights (a CP pair: -(1-sA), -sA, (1-sB), sB): vn = sum w_k v_k . normal
+    Vec3 normal;
     Real target, invK;  // invK = m_eff = 1 / sum w^2/m
     Real vn0;           // normal velocity before the impulses [m/s]
     Real lambda = 0;    // accumulated normal impulse [N s]
@@ -105,13 +116,15 @@ class ImpulseLaw {
     Vec3 kick = Vec3::Zero();  // (dt/2) sum w_k a_k of the fabric nodes (friction's energy share) [m/s]
     Real frictionTaken = 0;    // the tangential parts' energy share over this resolve's sweeps, taken out [J]
     Vec3 arm = Vec3::Zero();
+    Index contact = -1;  // the contact it is the row of (-1: a body contact)
   };
   // What an update without friction of a row on no body reads and writes, packed (104 B against a
   // Row's 192): a sweep streams every row, and this nearly halves the memory it moves.
   struct SweepRow {
-    Index node[4];
-    Real w[4];
-    Vec3 n;
+    Index node[kMaxStencil];
+    Real w[kMaxStencil];
+    int n;
+    Vec3 normal;
     Real target, invK, lambda;
     bool body;  // a row on a body: updated as a Row (solveRow), its lambda kept there
   };
@@ -152,6 +165,12 @@ class ImpulseLaw {
   Real dt_ = 0;
   std::vector<Index> touched_;
   std::vector<std::uint8_t> marked_;
+  // The serial tail's active set (solve): a counter of the updates that changed velocities, each
+  // node's value at its last change and each row's at its own last update.
+  std::int64_t writes_ = 0;
+  std::vector<std::int64_t> nodeWrite_, rowWrite_;
+  long skipped_ = 0;  // row updates the active set skipped in the last solve
+  Real solverTol_ = 0;  // the solve's tolerance on a row's miss [m/s] (resolve)
 };
 
 }  // namespace woven

@@ -22,7 +22,7 @@ struct Pushes {
 void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
                                  std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop,
                                  Real maxMove, SectionRule rule, Real dt, ProjectionReport& rep, SweepOrder order,
-                                 Real checkDepth) {
+                                 Real checkDepth, const Real* travelled) {
   rep = ProjectionReport{};
   const bool check = checkDepth >= 0;
   // A check's moves count against the travel of the projection after the same step's drift.
@@ -46,10 +46,10 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
   // groups of each phase of law/RowBlocks at once (they share no node), each in order, then the
   // seam in order.
   const bool blocked = order == SweepOrder::Blocked;
+  Real wUnused[kMaxStencil];
   const auto nodesOf = [&](Index q, Index* node) {
     if (order == SweepOrder::Sequential) return -1;
-    node[0] = f.elem0[contacts[q].cpA], node[1] = node[0] + 1, node[2] = f.elem0[contacts[q].cpB], node[3] = node[2] + 1;
-    return 4;
+    return contactStencil(f, contacts[q], node, wUnused);
   };
   if (blocked) blocking_.build(nc, f.pos, nodesOf);
   else colouring_.build(nc, f.nNodes(), nodesOf);
@@ -61,7 +61,9 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
   parallelFor(nc, kParallelGrain, threads(), [&](Index k) {
     const Index q = layout[k];
     const CPContact& c = contacts[q];
-    slots_[k] = {q, c.cpA, c.cpB, f.elem0[c.cpA], f.elem0[c.cpB]};
+    Slot& slot = slots_[k];
+    Real w[kMaxStencil];
+    slot.q = q, slot.cpA = c.cpA, slot.cpB = c.cpB, slot.n = contactStencil(f, c, slot.node, w);
   });
   bool bodyMoved = !check;
   // What a node may travel in all (this call and, after a check, the check before it).
@@ -93,10 +95,15 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
   movedAny_.assign(f.nNodes(), 0);
   // One contact's move; returns the overlap beyond allowance + slop it took out (0: no move) [m].
   const auto projectOne = [&](const Slot& slot, bool first) -> Real {
-    const Index i = slot.i, j = slot.j, q = slot.q;
+    const Index q = slot.q;
     if (first ? check && !(contacts[q].gap < -checkDepth)
-            : !(movedBefore(i) || movedBefore(i + 1) || movedBefore(j) || movedBefore(j + 1)))
+              : std::none_of(slot.node, slot.node + slot.n, movedBefore))
       return 0;
+    if (first && travelled) {  // the gap cannot have closed to -slop since it was measured
+      Real far = 0;
+      for (int k = 0; k < slot.n; ++k) far = std::max(far, travelled[slot.node[k]]);
+      if (contacts[q].gap - 2 * far > -slop) return 0;
+    }
     if (!f.alive[slot.cpA] || !f.alive[slot.cpB]) return 0;  // broken in this step
     CPContact& c = contacts[q];
     remeasure(f, c, rule, false);
@@ -104,14 +111,16 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     if (std::isnan(allowance_[q])) allowance_[q] = allowance(c);
     const Real C = c.gap + allowance_[q] + slop;
     if (!(C < 0)) return 0;
-    const Index node[4] = {i, i + 1, j, j + 1};
-    const Real w[4] = {-(1 - c.sA), -c.sA, 1 - c.sB, c.sB};
+    // The gradient at the remeasured points (a CP pair's may have slid; a crossing's are held).
+    Index node[kMaxStencil];
+    Real w[kMaxStencil];
+    const int n = contactStencil(f, c, node, w);
     Real K = 0;
-    for (int k = 0; k < 4; ++k) K += w[k] * w[k] * f.invMass[node[k]];
+    for (int k = 0; k < n; ++k) K += w[k] * w[k] * f.invMass[node[k]];
     if (!(K > 0)) return 0;  // both CPs kinematic
-    const Real dl = share(node, w, 4, -C / K);
+    const Real dl = share(node, w, n, -C / K);
     if (dl == 0) return 0;
-    move(node, w, 4, dl, c.normal);
+    move(node, w, n, dl, c.normal);
     return -C;
   };
   const int nThreads = threads();

@@ -26,6 +26,7 @@
 #include "fabric/Fabric.hpp"
 #include "geom/BodyContact.hpp"
 #include "geom/CPContact.hpp"
+#include "geom/GapFunction.hpp"
 #include "law/ContactParams.hpp"
 #include "law/RowBlocks.hpp"
 #include "law/RowColouring.hpp"
@@ -66,10 +67,14 @@ class PositionProjection {
   /// checkDepth >= 0: the check before the drift (see above): the first sweep takes only the
   /// contacts whose gap (as last measured) is below -checkDepth, the allowance is not asked, and the
   /// energy is booked for moves made before the drift.
+  /// `travelled` (may be null): per node, how far it can have moved since the contacts' gaps were
+  /// measured [m]. The first sweep then skips a contact whose gap, less what its nodes' travel can
+  /// close (twice the farthest of its stencil's nodes), stays above -slop:
+  /// measured, it would not be pushed (the same moves, without measuring most of a ply at rest).
   void project(Fabric& f, std::vector<CPContact>& contacts, std::vector<BodyContact>& bodyContacts,
                std::vector<RigidBody>& bodies, const Allowance& allowance, int sweeps, Real slop, Real maxMove,
                SectionRule rule, Real dt, ProjectionReport& report, SweepOrder order = SweepOrder::Coloured,
-               Real checkDepth = -1);
+               Real checkDepth = -1, const Real* travelled = nullptr);
 
  private:
   /// Contacts of a colour below which it is projected on one thread.
@@ -77,7 +82,9 @@ class PositionProjection {
   Real bookedEnergy(Fabric& f, Real dt);  // the energy the moves put in [J] (see project)
   std::vector<Real> allowance_;       // per contact, measured once per call (NaN: not yet)
   struct Slot {
-    Index q, cpA, cpB, i, j;  // the contact, its CPs and their first nodes
+    Index q, cpA, cpB;                // the contact and its CPs
+    int n;                            // its stencil's nodes (GapFunction's contactStencil), which
+    Index node[kMaxStencil];          // a sweep checks for moves before it reads the contact
   };
   std::vector<Slot> slots_;           // the contacts in colour order
   std::vector<Real> outcome_;         // per slot: the overlap its contact's move in this sweep took out [m] (0: none)

@@ -19,6 +19,7 @@
 #pragma once
 #include "core/Parallel.hpp"
 #include "core/Types.hpp"
+#include "law/RowColouring.hpp"
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -43,8 +44,8 @@ class RowBlocks {
     return p == 0 ? 0 : p == 1 ? kBlocks : p == 2 ? kBlocks + kBlocks / 2 : kSeam;
   }
 
-  /// Blocks rows [0, nRows): nodesOf(r, node) writes row r's nodes into node[0..3] and returns how
-  /// many (at most 4), or -1 for a row of the tail; pos: the node positions [m].
+  /// Blocks rows [0, nRows): nodesOf(r, node) writes row r's nodes into node[0..kMaxRowNodes) and
+  /// returns how many, or -1 for a row of the tail; pos: the node positions [m].
   template <class NodesOf>
   void build(Index nRows, const Vec3Array& pos, NodesOf&& nodesOf);
 
@@ -57,7 +58,7 @@ class RowBlocks {
  private:
   static constexpr int kBins = 64 * kBlocks;  // histogram of the rows along the cut axis
   struct RowNodes {
-    Index node[4];
+    Index node[kMaxRowNodes];
     int n;
   };
   std::vector<RowNodes> nodes_;

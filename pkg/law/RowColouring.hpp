@@ -19,13 +19,17 @@
 
 namespace woven {
 
+/// Most nodes a row (or a projected contact) reads: a persistent crossing's two lines
+/// (GapFunction's kMaxStencil).
+constexpr int kMaxRowNodes = 6;
+
 class RowColouring {
  public:
   /// Colours held in a node's 64-bit mask; the tail is colour kColours.
   static constexpr int kColours = 64;
 
   /// Colours rows [0, nRows) over nodes [0, nNodes): nodesOf(r, node) writes row r's nodes into
-  /// node[0..3] and returns how many (at most 4), or -1 for a row of the serial tail.
+  /// node[0..kMaxRowNodes) and returns how many, or -1 for a row of the serial tail.
   template <class NodesOf>
   void build(Index nRows, Index nNodes, NodesOf&& nodesOf);
 
@@ -54,7 +58,7 @@ void RowColouring::build(Index nRows, Index nNodes, NodesOf&& nodesOf) {
   Index count[kColours + 1] = {};
   used_ = 0;
   for (Index r = 0; r < nRows; ++r) {
-    Index node[4];
+    Index node[kMaxRowNodes];
     const int n = nodesOf(r, node);
     std::uint64_t taken = 0;
     for (int k = 0; k < n; ++k) taken |= mask_[node[k]];

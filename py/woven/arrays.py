@@ -44,10 +44,18 @@ def section_semi_axes(engine):
 
 def contacts(engine):
     """Contacts of the last step: columns cpA, cpB, gap [m] (< 0: overlap), normal x, y, z, sA, sB (the
-    contact point along each CP), kind (0 paper, 1 crossing, 2 side by side), hA, hB [m] (each section's
+    contact point along each CP), kind (0 paper, 1 crossing CP pair, 2 side by side, 3 persistent crossing), hA, hB [m] (each section's
     measure along the normal: the gap is the axes' distance less hA + hB; 0 in the paper's model);
     shape (n, 11)."""
     return np.frombuffer(engine._contacts(), dtype=np.float64).reshape(-1, 11)
+
+
+def crossings(engine):
+    """The persistent crossings (contact_model='gap', crossings='persistent'): columns cpA, sA, cpB, sB (the
+    sliding coordinates: a CP and the place along it), normal x, y, z (the side B lies on, seen from A),
+    measure [m] (the sections' hA + hB at the last step), impulse [N s] (the last step's normal impulse:
+    the warm start); shape (n, 9)."""
+    return np.frombuffer(engine._crossings(), dtype=np.float64).reshape(-1, 9)
 
 
 def candidate_pairs(engine, broad_phase='tree'):

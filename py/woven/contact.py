@@ -42,6 +42,9 @@ CONTACT_KEYS = {
                     "'coloured' (rows that share no node at once on the threads, colour by colour) or 'blocked' (slabs of the ply at once on the threads, "
                     "each in contact order, then the rows across the slabs); the same bits for any thread count in each"),
     'yarn_contacts': (True, '', 'contacts between yarns (False: only with rigid bodies; yarns pass through each other)'),
+    'crossings': ('persistent', '', "contact_model=gap: 'persistent' (one contact per crossing of two yarns, carried from step to step on "
+                  "their smooth centre lines; the default) or 'chords' (every CP pair measured afresh each step: four chord-pair contacts "
+                  "per crossing, the model before persistent crossings; docs/collisions.md)"),
 }
 
 

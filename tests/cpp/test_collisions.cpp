@@ -164,6 +164,7 @@ TEST(CollisionStage, APairNoLongerMeasuredForgetsItsMemoryWhileStillListed) {
     FabricEngine e(std::move(f));
     ContactParams c;
     c.skin = 2e-3;
+    c.crossings = Crossings::Chords;  // the general pipeline's memory (a persistent crossing keeps its side)
     e.enableCollisions(c, BroadPhase::Grid);
     for (Index k = 0; k < 4; ++k) e.dynamics().fix(k);
     std::vector<Real> gaps;

@@ -47,6 +47,7 @@ Landing land(bool onBody, Real mu, Real muBody, Real vy0, Real vz0, FabricEngine
     for (Index i = 2; i < e.fabric().nNodes(); ++i) e.dynamics().fix(i);
   ContactParams p;
   p.friction = mu, p.bodyFriction = muBody, p.positionCorrection = 0, p.tolerance = 1e-12;
+  p.solverTolerance = 0;
   e.enableCollisions(p);
   const Real h = 1e-3;
   if (onBody) e.collisions()->bodies.push_back(cube(h, bodyMass, Vec3(0, 0, -kR - h - 1e-6), Vec3::Zero()));

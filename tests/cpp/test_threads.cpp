@@ -128,8 +128,8 @@ struct RowNodes {
   const std::vector<CPContact>& cs;
   int operator()(Index r, Index* node) const {
     if (r >= static_cast<Index>(cs.size())) return -1;
-    node[0] = f.elem0[cs[r].cpA], node[1] = node[0] + 1, node[2] = f.elem0[cs[r].cpB], node[3] = node[2] + 1;
-    return 4;
+    Real w[kMaxStencil];
+    return contactStencil(f, cs[r], node, w);
   }
 };
 
@@ -155,7 +155,7 @@ void expectEveryRowOnceInRowOrder(const Layout& layout, int lastGroup, Index nRo
 TEST(Threads, TensionSceneIsTheSameBitsOnOneTwoAndThreeThreads) {
   const int steps = static_cast<int>(runLength(200, 4));
   const Outcome one = tension(1, steps);
-  EXPECT_GT(one.contacts, 1000);
+  EXPECT_GT(one.contacts, 500);  // one per crossing (576) and the neighbours alongside: several chunks
   for (int t : {2, 3}) expectSame(one, tension(t, steps), t);
 }
 
@@ -216,32 +216,32 @@ TEST(Threads, RowsOfAColourShareNoNodeOnAStruckPly) {
     std::vector<std::uint8_t> used(static_cast<std::size_t>(nNodes), 0);
     largest = std::max(largest, col.begin(c + 1) - col.begin(c));
     for (Index k = col.begin(c); k < col.begin(c + 1); ++k) {
-      Index node[4];
+      Index node[kMaxStencil];
       const int n = rowNodes(col.order()[k], node);
       for (int q = 0; q < n; ++q) EXPECT_FALSE(used[node[q]]) << "colour " << c << ": node " << node[q] << " in two rows";
       for (int q = 0; q < n; ++q) used[node[q]] = 1;
     }
   }
   for (Index r = 0; r < static_cast<Index>(cs.size()); ++r) {
-    Index node[4];
-    rowNodes(r, node);
-    for (int q = 0; q < 4; ++q) rowsAt[node[q]].push_back({r, col.colour(r)});
+    Index node[kMaxStencil];
+    const int n = rowNodes(r, node);
+    for (int q = 0; q < n; ++q) rowsAt[node[q]].push_back({r, col.colour(r)});
   }
   long tail = 0;
   for (Index r = 0; r < static_cast<Index>(cs.size()); ++r) {
     const int c = col.colour(r);
     tail += c == RowColouring::kColours;
-    Index node[4];
-    rowNodes(r, node);
+    Index node[kMaxStencil];
+    const int n = rowNodes(r, node);
     for (int lower = 0; lower < std::min(c, RowColouring::kColours); ++lower) {
       bool met = false;
-      for (int q = 0; q < 4 && !met; ++q)
+      for (int q = 0; q < n && !met; ++q)
         for (const auto& [other, oc] : rowsAt[node[q]]) met = met || (other < r && oc == lower);
       EXPECT_TRUE(met) << "row " << r << " of colour " << c << " could have taken colour " << lower;
     }
   }
   EXPECT_EQ(tail, 0) << "every yarn row found a colour";
-  EXPECT_GE(largest, 2 * ImpulseLaw::kRowGrain) << "a colour large enough to be split over the threads";
+  EXPECT_GT(largest, ImpulseLaw::kRowGrain) << "a colour large enough to be split over the threads";
   EXPECT_GE(col.colours(), 2);
   EXPECT_GT(o.impulseRows, 0);
 }
@@ -308,9 +308,9 @@ TEST(Threads, RowsOfTwoBlocksShareNoNodeOnAStruckPly) {
     std::vector<int> owner(o.pos.size(), -1);
     for (int g = RowBlocks::phaseBegin(phase); g < RowBlocks::phaseBegin(phase + 1); ++g)
       for (Index k = blocks.begin(g); k < blocks.begin(g + 1); ++k) {
-        Index node[4];
-        rowNodes(blocks.order()[k], node);
-        for (Index i : node) {
+        Index node[kMaxStencil];
+        const int n = rowNodes(blocks.order()[k], node);
+        for (Index i : std::vector<Index>(node, node + n)) {
           EXPECT_TRUE(owner[i] == -1 || owner[i] == g)
               << "phase " << phase << ": node " << i << " in groups " << owner[i] << " and " << g;
           owner[i] = g;
@@ -321,8 +321,10 @@ TEST(Threads, RowsOfTwoBlocksShareNoNodeOnAStruckPly) {
   const Index seam = blocks.begin(RowBlocks::kTail) - blocks.begin(RowBlocks::kSeam);
   EXPECT_GT(cuts, 0) << "rows across the cuts";
   EXPECT_LT(seam, nYarn / 50) << "rows across two cuts, solved on one thread";
+  // Equal counts at the resolution of whole crossing columns (a persistent crossing's row is one per
+  // crossing, all of a column's rows in one bin): no block under a quarter of the average.
   for (int b = 0; b < RowBlocks::kBlocks; ++b)
-    EXPECT_GT(blocks.begin(b + 1) - blocks.begin(b), (nYarn - cuts) / (2 * RowBlocks::kBlocks)) << "block " << b;
+    EXPECT_GT(blocks.begin(b + 1) - blocks.begin(b), (nYarn - cuts) / (4 * RowBlocks::kBlocks)) << "block " << b;
 }
 
 // Blocked sweeps are Gauss-Seidel in another row order: swept to convergence, they reach the velocities
@@ -337,7 +339,7 @@ TEST(Threads, BlockedAndSequentialSweepsConvergeToTheSameVelocities) {
     f.pos = o.pos, f.vel = o.vel, f.secFlat = o.flat, f.secDir = o.dir, f.alive = o.alive;
     for (Index i = 0; i < f.nNodes(); ++i) f.vel[i].z() -= 5.0 * (i % 7);  // rows that must push
     ContactParams p;
-    p.sweepOrder = order, p.maxIterations = 20000, p.tolerance = 1e-7;
+    p.sweepOrder = order, p.maxIterations = 20000, p.tolerance = 1e-7, p.solverTolerance = 0;
     ImpulseLaw law;
     ImpulseReport rep;
     law.resolve(f, o.contactList, [](const CPContact&) { return Real(0); }, 1e-8, p, rep);

@@ -1,0 +1,255 @@
+// The default impact with no YADE (scripts/ballistic.py's scene built from the C++ core): a KM2 706
+// ply clamped on its four edges, breakage on, struck at its centre by a rigid cube (shape/RigidBody:
+// 5.59 mm, 1.1 g, 200 m/s, 50 um above the ply), the scene's contact settings (grid broad phase, skin
+// 40 um, one flattening pass, 10 sweeps). Prints the time by phase of the collision stage, the
+// CP-step rate against the springs alone (the same ply, collisions and breakage off, the fastest of
+// three runs, in this process), the solve's figures and the run's outcome; with several thread counts
+// the speed-up of each against one thread beside an ideal loop's (core/ThreadCeiling.hpp), and
+// whether every count ends in the same bits (positions, velocities, sections, broken CPs, the cube).
+//   bench_impact [key=value ...]
+//     side=0.0508 [m]   cp=1 (CPs per span)   t_end=1e-4 [s]   V=200 [m/s]   crossings=persistent|chords
+//     threads=1 (comma-separated counts, e.g. 1,2,4,8,16)   sweeps=10   out=FILE (JSON of the figures)
+// The step is FabricEngine::step (the engine adapter's work without YADE's own).
+#include "core/Parallel.hpp"
+#include "core/ThreadCeiling.hpp"
+#include "engine/FabricEngine.hpp"
+#include "weave/WeaveBuilder.hpp"
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace woven;
+
+namespace {
+
+struct Options {
+  Real side = 0.0508, tEnd = 1e-4, V = 200, safety = 0.7;
+  int cp = 1, sweeps = 10;
+  std::string crossings = "persistent", out;
+  std::vector<int> threads = {1};
+};
+
+[[noreturn]] void usage(const std::string& why) {
+  std::fprintf(stderr, "bench_impact: %s\n  keys: side (0, 1] m, cp [1, 8], t_end (0, 1e-3] s, V (0, 5000] m/s, "
+               "crossings persistent|chords, threads c1,c2,... in [1, 256], sweeps [1, 1000], out FILE\n", why.c_str());
+  std::exit(2);
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int k = 1; k < argc; ++k) {
+    const std::string a = argv[k];
+    const auto eq = a.find('=');
+    if (eq == std::string::npos) usage("'" + a + "' is not key=value");
+    const std::string key = a.substr(0, eq), v = a.substr(eq + 1);
+    char* end = nullptr;
+    const auto num = [&](Real lo, Real hi) {
+      const Real x = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end || !(x > lo && x <= hi)) usage(key + " = " + v + " is out of range");
+      return x;
+    };
+    if (key == "side") o.side = num(0, 1);
+    else if (key == "cp") o.cp = static_cast<int>(num(0, 8));
+    else if (key == "t_end") o.tEnd = num(0, 1e-3);
+    else if (key == "V") o.V = num(0, 5000);
+    else if (key == "sweeps") o.sweeps = static_cast<int>(num(0, 1000));
+    else if (key == "crossings") {
+      if (v != "persistent" && v != "chords") usage("crossings = " + v + " is invalid: persistent or chords");
+      o.crossings = v;
+    } else if (key == "threads") {
+      o.threads.clear();
+      std::stringstream ss(v);
+      for (std::string t; std::getline(ss, t, ',');) {
+        const int n = std::atoi(t.c_str());
+        if (n < 1 || n > 256) usage("threads = " + v + " is out of range");
+        o.threads.push_back(n);
+      }
+      if (o.threads.empty()) usage("threads is empty");
+    } else if (key == "out") o.out = v;
+    else usage("unknown key '" + key + "'");
+  }
+  return o;
+}
+
+// The scene's ply (woven.ballistic.build_ply): whole pattern repeats of KM2 706 filling `side`.
+std::unique_ptr<FabricEngine> ply(const Options& o, bool collisions, bool breakage) {
+  WeaveParams p = km2_706();
+  p.cpPerSpan = o.cp;
+  p.nx = p.ny = std::max(1, static_cast<int>(std::lround(o.side / p.weftSpacing / 2)));
+  Weave w = buildWeave(p);
+  auto e = std::make_unique<FabricEngine>(std::move(w.fabric));
+  if (collisions) {
+    ContactParams c;
+    c.positionCorrection = 0, c.flattenPasses = 1, c.maxIterations = o.sweeps, c.skin = 4e-5;
+    c.crossings = crossingsByName(o.crossings);
+    e->enableCollisions(c, BroadPhase::Grid);
+    e->collisions()->settle(e->fabric());
+  }
+  for (const Yarn& y : e->fabric().yarns) e->dynamics().fix(y.firstNode), e->dynamics().fix(y.firstNode + y.nNodes - 1);
+  if (breakage) {
+    BreakageParams b;
+    b.enabled = true;
+    e->dynamics().configureBreakage(b);
+  }
+  return e;
+}
+
+// The cube above the ply's centre, its lowest face 50 um above the ply's top (the sections' reach).
+void addCube(FabricEngine& e, Real V) {
+  const Fabric& f = e.fabric();
+  Vec3 lo = Vec3::Constant(INFINITY), hi = -lo;
+  Real top = -INFINITY;
+  for (Index k = 0; k < f.nNodes(); ++k) {
+    lo = lo.cwiseMin(f.pos[k]), hi = hi.cwiseMax(f.pos[k]);
+    top = std::max(top, f.pos[k].z() + semiAxes(f.secRadius[k], f.secFlat[k], e.collisions()->params().rule).b);
+  }
+  RigidBody b;
+  RigidPart cube;
+  const Real half = 0.5 * 5.59e-3, mass = 1.1e-3;
+  cube.halfSize = Vec3::Constant(half);
+  b.parts.push_back(cube);
+  b.mass = mass, b.inertia = Vec3::Constant(mass * 4 * half * half / 6);
+  b.pos = Vec3(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), top + half + 5e-5);
+  b.vel = Vec3(0, 0, -V);
+  e.collisions()->bodies.push_back(b);
+}
+
+struct Result {
+  double wall = 0;
+  long steps = 0;
+  double phase[6] = {0, 0, 0, 0, 0, 0};  // refit, broad, narrow, respond, project, rest
+  long rows = 0, sweeps = 0, unresolved = 0, unresolvedBand = 0, skipped = 0, contacts = 0, crossings = 0, candidates = 0;
+  Real residual = 0;
+  Real vz = 0, maxOverlap = 0, balance = 0, work = 0;
+  long broken = 0;
+  std::uint64_t bits = 0;
+  CrossingCounts counts;
+};
+
+std::uint64_t hashBits(std::uint64_t h, const void* p, std::size_t n) {
+  const unsigned char* c = static_cast<const unsigned char*>(p);
+  for (std::size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 1099511628211ull;
+  return h;
+}
+
+Result impact(const Options& o, int threads) {
+  setThreads(threads);
+  auto e = ply(o, true, true);
+  addCube(*e, o.V);
+  const Real dt = o.safety * e->criticalDt();
+  const long steps = static_cast<long>(std::ceil(o.tEnd / dt - 1e-9));
+  CollisionStage& st = *e->collisions();
+  Result r;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (long k = 0; k < steps; ++k) {
+    e->step(dt);
+    r.rows += st.stats.impulses.rows, r.sweeps += st.stats.impulses.iterations;
+    r.unresolved += st.stats.impulses.unresolved, r.skipped += st.stats.impulses.skipped;
+    r.unresolvedBand += st.stats.impulses.unresolvedBand;
+    r.contacts += st.stats.contacts, r.crossings += st.stats.crossings.listed, r.candidates += st.stats.candidates;
+    r.residual = std::max(r.residual, st.stats.impulses.residual);
+  }
+  r.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  releaseThreads();
+  r.steps = steps;
+  double inStage = 0;
+  for (int k = 0; k < 5; ++k) r.phase[k] = st.stats.seconds[k], inStage += r.phase[k];
+  r.phase[5] = r.wall - inStage;
+  const Fabric& f = e->fabric();
+  r.vz = st.bodies[0].vel.z();
+  r.maxOverlap = st.stats.maxPenetration;
+  r.counts = st.stats.crossings;
+  const EnergyBooks b = e->dynamics().energy();
+  r.balance = b.balanceError(), r.work = b.work;
+  r.broken = std::count(f.alive.begin(), f.alive.end(), 0);
+  std::uint64_t h = 1469598103934665603ull;
+  h = hashBits(h, f.pos.data(), f.pos.size() * sizeof(Vec3));
+  h = hashBits(h, f.vel.data(), f.vel.size() * sizeof(Vec3));
+  h = hashBits(h, f.secFlat.data(), f.secFlat.size() * sizeof(Real));
+  h = hashBits(h, f.alive.data(), f.alive.size());
+  h = hashBits(h, &st.bodies[0].vel, sizeof(Vec3));
+  r.bits = h;
+  return r;
+}
+
+// CP-steps per second of the same ply's springs and integration alone (collisions and breakage off),
+// the fastest of three runs of `steps` steps, on one thread.
+double springsAlone(const Options& o, long steps) {
+  setThreads(1);
+  double best = 0;
+  for (int k = 0; k < 3; ++k) {
+    auto e = ply(o, false, false);
+    const Real dt = o.safety * e->criticalDt();
+    const auto t0 = std::chrono::steady_clock::now();
+    for (long s = 0; s < steps; ++s) e->step(dt);
+    const double w = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    best = std::max(best, double(e->fabric().nElems()) * steps / w);
+  }
+  return best;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options o = parse(argc, argv);
+  const Index cps = ply(o, false, false)->fabric().nElems();
+  const double alone = springsAlone(o, 300);
+  std::printf("bench_impact: %d CPs, cube %.0f m/s, %.0f us, crossings %s, %d sweeps at most\n", cps, o.V, o.tEnd * 1e6,
+              o.crossings.c_str(), o.sweeps);
+  std::printf("  springs + integration alone: %.3e CP-steps/s (fastest of 3, one thread)\n", alone);
+  std::string json = "{\"cps\": " + std::to_string(cps) + ", \"springs_alone_cp_steps_per_s\": " + std::to_string(alone) +
+                     ", \"crossings\": \"" + o.crossings + "\", \"runs\": [";
+  Result one;
+  bool same = true;
+  for (std::size_t q = 0; q < o.threads.size(); ++q) {
+    const int n = o.threads[q];
+    const Result r = impact(o, n);
+    const double rate = double(cps) * r.steps / r.wall;
+    const double ideal1 = idealLoopSeconds(1, 200), idealN = idealLoopSeconds(n, 200);
+    if (q == 0) one = r;
+    same = same && r.bits == one.bits;
+    std::printf("  %2d thread(s): %.2f s for %ld steps, %.3e CP-steps/s, coupled / alone = %.4f (goal 0.0333)", n, r.wall,
+                r.steps, rate, rate / alone);
+    if (q > 0) std::printf("; speed-up %.2fx (ideal loop %.2fx), bits %s", one.wall / r.wall, ideal1 / idealN,
+                           r.bits == one.bits ? "the same" : "DIFFER");
+    std::printf("\n    by phase [s]: refit %.2f broad %.2f narrow %.2f respond %.2f project %.2f rest %.2f\n", r.phase[0],
+                r.phase[1], r.phase[2], r.phase[3], r.phase[4], r.phase[5]);
+    std::printf("    per step: %.0f candidates, %.0f contacts (%.0f crossings), %.0f rows, %.2f sweeps, %.2f %% of rows "
+                "unresolved (%.2f %% beyond Eq. 4's 1e-6 m/s), largest miss %.3g m/s; %.0f row updates skipped\n",
+                double(r.candidates) / r.steps, double(r.contacts) / r.steps, double(r.crossings) / r.steps,
+                double(r.rows) / r.steps, double(r.sweeps) / r.steps, r.rows ? 100.0 * r.unresolved / r.rows : 0.0,
+                r.rows ? 100.0 * r.unresolvedBand / r.rows : 0.0, r.residual, double(r.skipped) / r.steps);
+    std::printf("    cube vz %.4f m/s, largest overlap %.3g um, energy balance %.3g %% of the work, %ld CPs broken\n", r.vz,
+                r.maxOverlap * 1e6, r.work != 0 ? 100 * r.balance / r.work : 0.0, r.broken);
+    std::printf("    crossings: %ld formed, handed back %ld break, %ld separation, %ld turn, %ld slide, %ld kink; %ld moved\n",
+                r.counts.formed, r.counts.handedBack[0], r.counts.handedBack[1], r.counts.handedBack[2],
+                r.counts.handedBack[3], r.counts.handedBack[4], r.counts.moved);
+    char buf[1024];
+    std::snprintf(buf, sizeof buf,
+                  "%s{\"threads\": %d, \"wall_s\": %.6g, \"steps\": %ld, \"cp_steps_per_s\": %.6g, \"ratio_to_alone\": %.6g, "
+                  "\"speedup\": %.6g, \"ideal_speedup\": %.6g, \"same_bits\": %s, \"phase_s\": [%.4g, %.4g, %.4g, %.4g, %.4g, %.4g], "
+                  "\"rows_per_step\": %.6g, \"sweeps_per_step\": %.4g, \"unresolved_pct\": %.4g, \"largest_miss\": %.4g, "
+                  "\"vz\": %.10g, \"max_overlap\": %.6g, \"balance\": %.6g, \"work\": %.6g, \"broken\": %ld}",
+                  q ? ", " : "", n, r.wall, r.steps, rate, rate / alone, one.wall / r.wall, ideal1 / idealN,
+                  r.bits == one.bits ? "true" : "false", r.phase[0], r.phase[1], r.phase[2], r.phase[3], r.phase[4], r.phase[5],
+                  double(r.rows) / r.steps, double(r.sweeps) / r.steps, r.rows ? 100.0 * r.unresolved / r.rows : 0.0,
+                  r.residual, r.vz, r.maxOverlap, r.balance, r.work, r.broken);
+    json += buf;
+  }
+  json += std::string("], \"same_bits\": ") + (same ? "true" : "false") + "}\n";
+  if (!o.out.empty()) {
+    FILE* fp = std::fopen(o.out.c_str(), "w");
+    if (!fp) usage("out = " + o.out + " cannot be written");
+    std::fputs(json.c_str(), fp);
+    std::fclose(fp);
+  }
+  return same ? 0 : 1;
+}
