@@ -11,7 +11,6 @@
 #include <chrono>
 #include <type_traits>
 #include <cmath>
-#include <cstdlib>
 
 namespace woven {
 
@@ -708,7 +707,7 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt, Real horizon) {
   Real added = 0;
   if (!penalty) {
     law_.resolve(f, contacts_, capacityOf(f), dt, params_, stats.impulses, bodyContacts_, &bodies, horizon,
-                 std::getenv("WOVEN_ALLROWS") ? nullptr : markRowable(f, horizon));
+                 markRowable(f, horizon));
     if (!crossings_.empty()) {  // the crossings' impulses: the next step's warm start
       law_.contactImpulses(contacts_.size(), impulses_);
       crossings_.keepImpulses(contacts_, impulses_);
