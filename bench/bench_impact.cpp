@@ -7,9 +7,13 @@
 // the speed-up of each against one thread beside an ideal loop's (core/ThreadCeiling.hpp), and
 // whether every count ends in the same bits (positions, velocities, sections, broken CPs, the cube).
 //   bench_impact [key=value ...]
-//     side=0.0508 [m]   cp=1 (CPs per span)   t_end=1e-4 [s]   V=200 [m/s]   crossings=persistent|chords
+//     side=0.0508 [m]   cp=1 (CPs per span)   t_end=1e-4 [s]   V=200 [m/s]   crossings=persistent|chords   skin=4e-5 [m]
 //     threads=1 (comma-separated counts, e.g. 1,2,4,8,16)   sweeps=10   out=FILE (JSON of the figures)
-// The step is FabricEngine::step (the engine adapter's work without YADE's own).
+//     baseline=1 (0: no springs-alone runs; for instruction counts of the coupled run alone)
+//     every=0 (N > 0: a line every N steps with the wall time per step and the counts then)
+// The step is FabricEngine::step (the engine adapter's work without YADE's own). Built with
+// -DWOVEN_BASELINE against an earlier tree's core (bench/baseline_impact.sh), it runs that core's
+// model on the same scene: the paired runs of the persistent-crossing issue.
 #include "core/Parallel.hpp"
 #include "core/ThreadCeiling.hpp"
 #include "engine/FabricEngine.hpp"
@@ -31,15 +35,17 @@ using namespace woven;
 namespace {
 
 struct Options {
-  Real side = 0.0508, tEnd = 1e-4, V = 200, safety = 0.7;
+  Real side = 0.0508, tEnd = 1e-4, V = 200, safety = 0.7, skin = 4e-5;
   int cp = 1, sweeps = 10;
+  bool baseline = true;
+  int every = 0;
   std::string crossings = "persistent", out;
   std::vector<int> threads = {1};
 };
 
 [[noreturn]] void usage(const std::string& why) {
   std::fprintf(stderr, "bench_impact: %s\n  keys: side (0, 1] m, cp [1, 8], t_end (0, 1e-3] s, V (0, 5000] m/s, "
-               "crossings persistent|chords, threads c1,c2,... in [1, 256], sweeps [1, 1000], out FILE\n", why.c_str());
+               "crossings persistent|chords, threads c1,c2,... in [1, 256], sweeps [1, 1000], skin [0, 0.01] m, baseline 0|1, every [0, 1e6] steps, out FILE\n", why.c_str());
   std::exit(2);
 }
 
@@ -61,6 +67,9 @@ Options parse(int argc, char** argv) {
     else if (key == "t_end") o.tEnd = num(0, 1e-3);
     else if (key == "V") o.V = num(0, 5000);
     else if (key == "sweeps") o.sweeps = static_cast<int>(num(0, 1000));
+    else if (key == "baseline") o.baseline = num(-1, 1) > 0;
+    else if (key == "skin") o.skin = num(-1, 1e-2);
+    else if (key == "every") o.every = static_cast<int>(num(-1, 1e6));
     else if (key == "crossings") {
       if (v != "persistent" && v != "chords") usage("crossings = " + v + " is invalid: persistent or chords");
       o.crossings = v;
@@ -88,8 +97,10 @@ std::unique_ptr<FabricEngine> ply(const Options& o, bool collisions, bool breaka
   auto e = std::make_unique<FabricEngine>(std::move(w.fabric));
   if (collisions) {
     ContactParams c;
-    c.positionCorrection = 0, c.flattenPasses = 1, c.maxIterations = o.sweeps, c.skin = 4e-5;
+    c.positionCorrection = 0, c.flattenPasses = 1, c.maxIterations = o.sweeps, c.skin = o.skin;
+#ifndef WOVEN_BASELINE
     c.crossings = crossingsByName(o.crossings);
+#endif
     e->enableCollisions(c, BroadPhase::Grid);
     e->collisions()->settle(e->fabric());
   }
@@ -126,13 +137,28 @@ struct Result {
   double wall = 0;
   long steps = 0;
   double phase[6] = {0, 0, 0, 0, 0, 0};  // refit, broad, narrow, respond, project, rest
-  long rows = 0, sweeps = 0, unresolved = 0, unresolvedBand = 0, skipped = 0, contacts = 0, crossings = 0, candidates = 0;
+  long rows = 0, sweeps = 0, unresolved = 0, unresolvedBand = 0, skipped = 0, renewed = 0, contacts = 0, crossings = 0, candidates = 0;
   Real residual = 0;
   Real vz = 0, maxOverlap = 0, balance = 0, work = 0;
   long broken = 0;
   std::uint64_t bits = 0;
+#ifndef WOVEN_BASELINE
   CrossingCounts counts;
+#else
+  struct {
+    long formed = 0, handedBack[5] = {}, moved = 0;
+  } counts;
+#endif
 };
+
+// The CPs the step's partial broad phase collided again (a baseline core does not count them).
+long renewedOf(const CollisionStats& s) {
+#ifndef WOVEN_BASELINE
+  return s.renewed;
+#else
+  return 0 * s.steps;
+#endif
+}
 
 std::uint64_t hashBits(std::uint64_t h, const void* p, std::size_t n) {
   const unsigned char* c = static_cast<const unsigned char*>(p);
@@ -149,12 +175,31 @@ Result impact(const Options& o, int threads) {
   CollisionStage& st = *e->collisions();
   Result r;
   const auto t0 = std::chrono::steady_clock::now();
+  double lastWall = 0;
   for (long k = 0; k < steps; ++k) {
     e->step(dt);
+    if (o.every > 0 && (k + 1) % o.every == 0) {
+      const double w = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::printf("    step %5ld: %.2f ms/step, %ld contacts (%ld crossings), %ld rows, %ld unresolved, %ld candidates, "
+                  "%ld renewed, cube vz %.2f, balance %.4g J\n", k + 1, 1e3 * (w - lastWall) / o.every, st.stats.contacts,
+#ifndef WOVEN_BASELINE
+                  st.stats.crossings.listed,
+#else
+                  0L,
+#endif
+                  st.stats.impulses.rows, st.stats.impulses.unresolved, st.stats.candidates, renewedOf(st.stats),
+                  st.bodies[0].vel.z(), e->dynamics().energy().balanceError());
+      lastWall = w;
+    }
     r.rows += st.stats.impulses.rows, r.sweeps += st.stats.impulses.iterations;
-    r.unresolved += st.stats.impulses.unresolved, r.skipped += st.stats.impulses.skipped;
-    r.unresolvedBand += st.stats.impulses.unresolvedBand;
-    r.contacts += st.stats.contacts, r.crossings += st.stats.crossings.listed, r.candidates += st.stats.candidates;
+    r.unresolved += st.stats.impulses.unresolved, r.contacts += st.stats.contacts, r.candidates += st.stats.candidates;
+    r.renewed += renewedOf(st.stats);
+#ifndef WOVEN_BASELINE
+    r.skipped += st.stats.impulses.skipped, r.unresolvedBand += st.stats.impulses.unresolvedBand;
+    r.crossings += st.stats.crossings.listed;
+#else
+    r.unresolvedBand += st.stats.impulses.unresolved;
+#endif
     r.residual = std::max(r.residual, st.stats.impulses.residual);
   }
   r.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -166,7 +211,9 @@ Result impact(const Options& o, int threads) {
   const Fabric& f = e->fabric();
   r.vz = st.bodies[0].vel.z();
   r.maxOverlap = st.stats.maxPenetration;
+#ifndef WOVEN_BASELINE
   r.counts = st.stats.crossings;
+#endif
   const EnergyBooks b = e->dynamics().energy();
   r.balance = b.balanceError(), r.work = b.work;
   r.broken = std::count(f.alive.begin(), f.alive.end(), 0);
@@ -201,7 +248,7 @@ double springsAlone(const Options& o, long steps) {
 int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
   const Index cps = ply(o, false, false)->fabric().nElems();
-  const double alone = springsAlone(o, 300);
+  const double alone = o.baseline ? springsAlone(o, 300) : NAN;
   std::printf("bench_impact: %d CPs, cube %.0f m/s, %.0f us, crossings %s, %d sweeps at most\n", cps, o.V, o.tEnd * 1e6,
               o.crossings.c_str(), o.sweeps);
   std::printf("  springs + integration alone: %.3e CP-steps/s (fastest of 3, one thread)\n", alone);
@@ -213,7 +260,7 @@ int main(int argc, char** argv) {
     const int n = o.threads[q];
     const Result r = impact(o, n);
     const double rate = double(cps) * r.steps / r.wall;
-    const double ideal1 = idealLoopSeconds(1, 200), idealN = idealLoopSeconds(n, 200);
+    const double ideal1 = q > 0 ? idealLoopSeconds(1, 200) : 1, idealN = q > 0 ? idealLoopSeconds(n, 200) : 1;
     if (q == 0) one = r;
     same = same && r.bits == one.bits;
     std::printf("  %2d thread(s): %.2f s for %ld steps, %.3e CP-steps/s, coupled / alone = %.4f (goal 0.0333)", n, r.wall,
@@ -222,11 +269,11 @@ int main(int argc, char** argv) {
                            r.bits == one.bits ? "the same" : "DIFFER");
     std::printf("\n    by phase [s]: refit %.2f broad %.2f narrow %.2f respond %.2f project %.2f rest %.2f\n", r.phase[0],
                 r.phase[1], r.phase[2], r.phase[3], r.phase[4], r.phase[5]);
-    std::printf("    per step: %.0f candidates, %.0f contacts (%.0f crossings), %.0f rows, %.2f sweeps, %.2f %% of rows "
+    std::printf("    per step: %.0f CPs out of their skin, %.0f candidates, %.0f contacts (%.0f crossings), %.0f rows, %.2f sweeps, %.2f %% of rows "
                 "unresolved (%.2f %% beyond Eq. 4's 1e-6 m/s), largest miss %.3g m/s; %.0f row updates skipped\n",
-                double(r.candidates) / r.steps, double(r.contacts) / r.steps, double(r.crossings) / r.steps,
-                double(r.rows) / r.steps, double(r.sweeps) / r.steps, r.rows ? 100.0 * r.unresolved / r.rows : 0.0,
-                r.rows ? 100.0 * r.unresolvedBand / r.rows : 0.0, r.residual, double(r.skipped) / r.steps);
+                double(r.renewed) / r.steps, double(r.candidates) / r.steps, double(r.contacts) / r.steps,
+                double(r.crossings) / r.steps, double(r.rows) / r.steps, double(r.sweeps) / r.steps,
+                r.rows ? 100.0 * r.unresolved / r.rows : 0.0, r.rows ? 100.0 * r.unresolvedBand / r.rows : 0.0, r.residual, double(r.skipped) / r.steps);
     std::printf("    cube vz %.4f m/s, largest overlap %.3g um, energy balance %.3g %% of the work, %ld CPs broken\n", r.vz,
                 r.maxOverlap * 1e6, r.work != 0 ? 100 * r.balance / r.work : 0.0, r.broken);
     std::printf("    crossings: %ld formed, handed back %ld break, %ld separation, %ld turn, %ld slide, %ld kink; %ld moved\n",

@@ -178,9 +178,10 @@ void enableCollisionsPy(FabricEngine& e, Real restitution, Real friction, Real b
                         bool yarnContacts, Real cacheDistance, const std::string& response, Real penaltyStiffness,
                         Real penaltyDamping, const std::string& flattening, Real sectionStiffness,
                         const std::string& model, int projectionSweeps, Real projectionSlop, Real projectionMaxMove,
-                        const std::string& sweepOrder, Real projectionCheck, const std::string& crossings) {
+                        const std::string& sweepOrder, Real projectionCheck, const std::string& crossings,
+                        Real solverTolerance) {
   ContactParams p;
-  p.crossings = crossingsByName(crossings);
+  p.crossings = crossingsByName(crossings), p.solverTolerance = solverTolerance;
   p.sweepOrder = sweepOrderByName(sweepOrder);
   p.model = contactModelByName(model), p.projectionSweeps = projectionSweeps, p.projectionSlop = projectionSlop;
   p.projectionMaxMove = projectionMaxMove, p.projectionCheck = projectionCheck;
@@ -204,6 +205,8 @@ bp::dict collisionStats(FabricEngine& e) {
   d["flattened"] = s.flattened, d["flatten_passes"] = s.flattenPasses;
   d["impulse_rows"] = s.impulses.rows, d["iterations"] = s.impulses.iterations, d["residual"] = s.impulses.residual;
   d["unresolved"] = s.impulses.unresolved, d["penetration"] = s.penetration, d["max_penetration"] = s.maxPenetration;
+  d["unresolved_band"] = s.impulses.unresolvedBand, d["skipped_updates"] = s.impulses.skipped;
+  d["renewed"] = s.renewed;
   d["max_unresolved"] = s.maxUnresolved, d["max_residual"] = s.maxResidual;
   d["correction_energy"] = s.correctionEnergy;
   d["mean_penetration"] = s.meanPenetration, d["overlapping"] = s.overlapping;
@@ -598,7 +601,8 @@ BOOST_PYTHON_MODULE(_woven) {
             bp::arg("response") = "impulse", bp::arg("penalty_stiffness") = 1e5, bp::arg("penalty_damping") = 0.0,
             bp::arg("flattening") = "geometric", bp::arg("section_stiffness") = 1e4, bp::arg("contact_model") = "gap",
             bp::arg("projection_sweeps") = -1, bp::arg("projection_slop") = 0.5e-6, bp::arg("projection_max_move") = 10e-6,
-            bp::arg("sweep_order") = "sequential", bp::arg("projection_check") = 2e-6, bp::arg("crossings") = "persistent"),
+            bp::arg("sweep_order") = "sequential", bp::arg("projection_check") = 2e-6, bp::arg("crossings") = "persistent",
+            bp::arg("solver_tolerance") = 1e-9),
            "Collision handling (paper Sec. 4-5), SI: restitution e in [0, 1], Coulomb friction (yarn-yarn) and body_friction "
            "(rigid body-yarn) in [0, 2], 0 with response 'penalty', mcd in (0, 1), "
            "section_rule 'constant_area' or 'paper', margin [m] >= 0, tolerance [m/s] > 0, position_correction "
@@ -612,7 +616,8 @@ BOOST_PYTHON_MODULE(_woven) {
            "projection_slop [m] in [0, 1e-3], projection_max_move [m] in (0, 1e-3], sweep_order 'sequential' (contact order; the default), "
            "'coloured' (rows of a colour on the threads) or 'blocked' (slabs of the ply on the threads), projection_check [m] in [0, 1e-3] or -1 (contacts still deeper "
            "after the flattening are projected out before the rows; -1: no check), crossings 'persistent' (one contact per crossing, "
-           "carried between steps; the default) or 'chords' (every CP pair measured afresh). See woven.contact.")
+           "carried between steps; the default) or 'chords' (every CP pair measured afresh), solver_tolerance [m] in [0, 1e-3] "
+           "(the impulse sweeps stop once no row errs the step's drift by more; 0: tolerance alone). See woven.contact.")
       .def("disable_collisions", +[](FabricEngine& e) { e.disableCollisions(); })
       .add_property("collisions_enabled", +[](FabricEngine& e) { return e.collisions() != nullptr; })
       .def("settle_sections", +[](FabricEngine& e, int passes) { return stageOf(e).settle(e.fabric(), passes); },

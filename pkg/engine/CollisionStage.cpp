@@ -114,7 +114,7 @@ void CollisionStage::trackCrossings(const Fabric& f) {
   if (crossings_.footprints().size() != f.nElems()) crossings_.reset(f);
   filter_.crossings = &crossings_.footprints();
   renew_.assign(static_cast<std::size_t>(f.nElems()), 0);
-  if (crossings_.track(f, params_, renew_)) {  // footprints moved onto new CPs: their pairs leave
+  if (crossings_.track(f, params_, chords_.unit, renew_)) {  // footprints moved onto new CPs: their pairs leave
     crossings_.exclude(pairs_);
     pairsChanged_ = true;
   }
@@ -137,7 +137,7 @@ void CollisionStage::seedReturned() {
 
 void CollisionStage::measureCrossings(const Fabric& f, Real dt, bool formNew) {
   if (!params_.persistentCrossings()) return;
-  if (formNew && crossings_.form(f, contacts_, params_)) {
+  if (formNew && crossings_.form(f, contacts_, params_, chords_.unit)) {
     // The new crossings' chord pairs leave the candidates and this step's contacts.
     crossings_.exclude(pairs_);
     crossings_.exclude(contacts_);
@@ -171,6 +171,29 @@ void CollisionStage::refit(Fabric& f, Real dt) {
     speed_[e] = std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm()));
     grow_[e] = dt * speed_[e] + projected;
   });
+  // Each node's odometer, the path it has travelled between the passes (at least its displacement,
+  // however it moved: drifts, projections, checks), and each CP's, its two nodes' sum: the narrow
+  // phase's screen bounds how far a pair's axes have come since it last measured them.
+  if (lastPos_.size() != f.pos.size()) lastPos_ = f.pos, travelled_.assign(f.pos.size(), 0.0);
+  parallelFor(f.nNodes(), kParallelGrain, threads(), [&](Index k) {
+    travelled_[k] += (f.pos[k] - lastPos_[k]).norm();
+    lastPos_[k] = f.pos[k];
+  });
+  odometer_.resize(f.elem0.size());
+  parallelFor(f.nElems(), kParallelGrain, threads(),
+              [&](Index e) { odometer_[e] = travelled_[f.elem0[e]] + travelled_[f.elem0[e] + 1]; });
+  // Model Gap: each CP's unit chord and its length, once for the four or so pairs that share it and
+  // the crossings (the same expressions as pair by pair: same bits).
+  if (params_.model == ContactModel::Gap) {
+    chords_.unit.resize(f.nElems());
+    chords_.length.resize(f.nElems());
+    parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
+      const Index i = f.elem0[e];
+      const Vec3 d = f.pos[i + 1] - f.pos[i];
+      chords_.unit[e] = d.normalized();
+      chords_.length[e] = d.norm();
+    });
+  }
   growBoxes(bounds_, grow_, grown_);
 }
 
@@ -200,7 +223,8 @@ void CollisionStage::broad(const Fabric& f) {
     parallelFor(static_cast<Index>(grown_.size()), kParallelGrain, threads(), [&](Index e) {
       outside_[e] = !inside(grown_[e], skinBoxes_[e]) || (renewing && renew_[e]);
     });
-    if (std::find(outside_.begin(), outside_.end(), 1) == outside_.end()) return;
+    stats.renewed = std::count(outside_.begin(), outside_.end(), 1);
+    if (stats.renewed == 0) return;
     if (broadPhase != BroadPhase::SweepAndPrune) {
       const bool byYarn = broadPhase == BroadPhase::YarnTree;
       const std::vector<std::uint8_t>& renew = byYarn ? dirtyYarn_ : outside_;
@@ -236,6 +260,7 @@ void CollisionStage::broad(const Fabric& f) {
       return;
     }
   }
+  stats.renewed = 0;
   skinBoxes_ = grown_;
   for (OBB& b : skinBoxes_) b.extent.array() += params_.skin;
   if (broadPhase == BroadPhase::YarnTree) tree.collide(f, skinBoxes_, filter_, pairs_);
@@ -310,19 +335,16 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
   pairsChanged_ = false;
   if (gapModel) seedReturned();
   if (gapModel) {
-    // Each node's major semi-axis [m]; each CP's unit chord and its length, once for the four or so
-    // pairs that share it (the same expressions as pair by pair: same bits). The speeds are refit's
-    // (every narrow phase follows a refit, with the same velocities).
+    // Each node's major semi-axis [m], and each CP's largest at the MCD (the screen's). The speeds,
+    // the CPs' chords and odometers are refit's (every narrow phase follows a refit, with the same
+    // positions and velocities).
     widest_.resize(f.secRadius.size());
     parallelFor(f.nNodes(), kParallelGrain, threads(),
                 [&](Index k) { widest_[k] = semiAxes(f.secRadius[k], f.secFlat[k], params_.rule).a; });
-    chords_.unit.resize(f.nElems());
-    chords_.length.resize(f.nElems());
+    widestAtMcd_.resize(f.elem0.size());
     parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
       const Index i = f.elem0[e];
-      const Vec3 d = f.pos[i + 1] - f.pos[i];
-      chords_.unit[e] = d.normalized();
-      chords_.length[e] = d.norm();
+      widestAtMcd_[e] = semiAxes(std::max(f.secRadius[i], f.secRadius[i + 1]), params_.mcd, params_.rule).a;
     });
   }
   // Pairs the position projection may move together (each node at most kProjectionTravel x
@@ -354,6 +376,15 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         // contacts: the row lets each close exactly its gap), bounded by the node speeds.
         const Index i = f.elem0[pr.a], j = f.elem0[pr.b];
         const Real reach = params_.margin + 2 * projected + dt * (speed_[pr.a] + speed_[pr.b]);
+        // The screen: the pair's clearance beyond the widest sections the MCD allows, as last
+        // evaluated, less what its CPs' nodes have travelled since (the axes' distance moves by no
+        // more), still beyond the reach: the test below would skip it (its widest sections are no
+        // wider), so it is skipped unmeasured, with the same outcome (the neighbours of a tight
+        // weave lie 30-80 um apart, and most of a ply moves far less than that in a step).
+        if (pc.clear - (odometer_[pr.a] + odometer_[pr.b] - pc.odometer) > reach) {
+          if (pc.memo) pc.forget();
+          continue;
+        }
         // No section reaches beyond its major semi-axis: pairs whose axes are farther apart than
         // that cannot be listed (most pairs of a broad phase with a skin), and need no sections;
         // nor can pairs whose boxes grown by the step's motion do not meet. A pair that fails either
@@ -362,12 +393,14 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         // the default impact.
         const Real widest = std::max(std::max(widest_[i], widest_[i + 1]), std::max(widest_[j], widest_[j + 1]));
         const SegmentClosest axes = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
+        pc.clear = axes.distance - widestAtMcd_[pr.a] - widestAtMcd_[pr.b];
+        pc.odometer = odometer_[pr.a] + odometer_[pr.b];
         // The boxes' test probed first at the point between the axes (a crossing's midpoint lies
         // inside both sections).
         if (axes.distance > 2 * widest + reach ||
             !obbOverlap(grown_[pr.a], grown_[pr.b],
                         closestMidpoint(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1], axes))) {
-          if (pc.memo) pc = PairMemo();  // as a pair the broad phase no longer lists: the contacts do not depend on its skin
+          if (pc.memo) pc.forget();  // as a pair the broad phase no longer lists: the contacts do not depend on its skin
           continue;
         }
         bool side = sideBySide(f, pr.a, pr.b, pc.memo && pc.side, &chords_);
@@ -957,8 +990,10 @@ Real CollisionStage::overlap(Fabric& f) {
 void CollisionStage::candidatePairs(Fabric& f, BroadPhase which, std::vector<CPPair>& out) {
   const ThreadCountScope threadCount(params_.threads);
   refit(f, 0);
+  // A grid of its own: the stage's holds the boxes of its broad phase (the tree refits to the boxes
+  // it is given).
   if (which == BroadPhase::YarnTree) tree.collide(f, grown_, filter_, out);
-  else if (which == BroadPhase::Grid) grid.collide(f, grown_, filter_, out);
+  else if (which == BroadPhase::Grid) GridCollider().collide(f, grown_, filter_, out);
   else sap.collide(f, grown_, filter_, out);
 }
 

@@ -57,6 +57,7 @@ struct CollisionStats {
   long steps = 0;
   long broadPhases = 0;       ///< broad phases run (the other steps reused the pairs: Verlet skin)
   long partialBroadPhases = 0;  ///< of which only for the CPs (grid) or yarns (OBB tree) that left their skin
+  long renewed = 0;           ///< CPs the last step's partial broad phase collided again (0: none or a full phase)
   Real maxPenetration = 0;    ///< [m]
   /// Sums over the steps of the overlaps of the contacts overlapping after flattening and of their
   /// count [m, -], for the mean over contacts and time (yarn-yarn; bodies below).
@@ -175,10 +176,15 @@ class CollisionStage : public StepHook {
 
  private:
   void refit(Fabric& f, Real dt);
-  /// How far the position projection may move a node after the drift [m] (kProjectionTravel x
-  /// projection_max_move; 0 without it): boxes grow by it and pairs within it are listed.
+  /// How far a contact of the position projection after the drift may move a node [m]
+  /// (projection_max_move; 0 without it): boxes grow by it and pairs within it are listed, so that
+  /// no single push carries a node into a pair nobody measured. A node pushed by several contacts
+  /// (up to kProjectionTravel x projection_max_move) may reach one beyond; the next step lists it
+  /// and its check takes the overlap out before the rows. Listed to kProjectionTravel x, the side-by-
+  /// side neighbours of a tight weave (30-80 um apart) were measured at every step for pushes that,
+  /// with the projection's rebound (kRebound), are a fraction of a micrometre.
   Real projectionReach(Real dt) const {
-    return dt > 0 && params_.projectionSweepCount() > 0 ? kProjectionTravel * params_.projectionMaxMove : 0.0;
+    return dt > 0 && params_.projectionSweepCount() > 0 ? params_.projectionMaxMove : 0.0;
   }
   void broad(const Fabric& f);
   void narrow(const Fabric& f, Real dt);
@@ -202,6 +208,15 @@ class CollisionStage : public StepHook {
     int memoPoints = 0;
     Real memoS[2] = {0, 0}, memoT[2] = {0, 0}, memoMeasure[2] = {0, 0};
     Vec3 memoNormal[2] = {Vec3::Zero(), Vec3::Zero()};
+    // The screen (narrow): the axes' distance less both CPs' widest sections at the MCD when the
+    // pair was last evaluated [m] (-inf: never), and their odometers' sum then [m].
+    Real clear = -INFINITY, odometer = 0;
+    /// The measure forgotten (the pair not measured since its boxes parted); the screen kept.
+    void forget() {
+      const Real c = clear, o = odometer;
+      *this = PairMemo();
+      clear = c, odometer = o;
+    }
   };
   // A pair's last static contact (model Paper, contact_cache > 0: ContactParams::cacheDistance).
   struct PairCache {
@@ -233,6 +248,9 @@ class CollisionStage : public StepHook {
   std::vector<Real> grow_, flatBefore_, widest_;  // widest_: per node, the major semi-axis (model Gap)
   ChordFrames chords_;                           // narrow (model Gap): each CP's unit chord and length
   std::vector<Real> speed_;                      // refit: each CP's faster node's speed [m/s] (boxes, narrow)
+  Vec3Array lastPos_;                            // refit: each node's position at the last pass [m]
+  std::vector<Real> travelled_, odometer_;       // per node the path travelled since the start, per CP its nodes' sum [m]
+  std::vector<Real> widestAtMcd_;                // narrow (model Gap): each CP's widest semi-axis at the MCD [m]
   std::vector<CPPair> pairs_;
   std::vector<CPContact> contacts_;
   std::vector<BodyCandidate> bodyPairs_;

@@ -13,23 +13,19 @@ const Real kFormCos = std::cos(CrossingContacts::kFormDeg * kPi / 180);
 const Real kKinkCos = std::cos(CrossingContacts::kKinkDeg * kPi / 180);
 const Real kFormKinkCos = std::cos(CrossingContacts::kFormKinkDeg * kPi / 180);
 // A Newton step of the closest points that moves them less than this has converged [m] (1e-6 of a
-// KM2 yarn's thickness); track makes at most kTrackSteps a step (one, once converged: the points
-// move far less than a CP in a step), form kFormSteps from a chord pair's point.
+// KM2 yarn's thickness): form makes at most kFormSteps from a chord pair's point.
 constexpr Real kConverged = 1e-10;
-constexpr int kTrackSteps = 3, kFormSteps = 30;
+constexpr int kFormSteps = 30;
+// A crossing's footprint is drawn for its places slid by up to this fraction of their CPs, and
+// drawn again only when they have slid farther (or into another CP).
+constexpr Real kFootprintSlide = 0.05;
 // Most a crossing's points may move in one step, in CP lengths (Slide beyond).
 constexpr Real kJump = 0.25;
-// How much less than the chords' gap a new crossing's gap may read, of its measure (the chords cut
-// inside a smooth crossing: they read up to 2 % of the measure less there, never more).
-constexpr Real kFormSlack = 0.05;
+
 // Footprint reach beyond the other yarn's widest half-width: the CPs' stretch (rest lengths measure
 // the arc) and the margin.
 constexpr Real kFootprintStretch = 1.1;
 
-inline Vec3 chord(const Fabric& f, Index e) {
-  const Index i = f.elem0[e];
-  return (f.pos[i + 1] - f.pos[i]).normalized();
-}
 }  // namespace
 
 void CrossingContacts::reset(const Fabric& f) {
@@ -38,22 +34,18 @@ void CrossingContacts::reset(const Fabric& f) {
   counts = CrossingCounts{};
 }
 
-// The cosine of the sharpest turn of the chain at CP e's two nodes (1: straight there).
-Real CrossingContacts::straightness(const Fabric& f, Index e) {
+// Whether a crossing's line may use CP e: 0 when e and its neighbours in its yarn are alive (the line
+// on e reads their nodes) and the chain turns at e's two nodes by less than the angle of cosine
+// kinkCos (`chord`: the CPs' unit chords); else the hand-back rule that fails, Break or Kink.
+int CrossingContacts::usable(const Fabric& f, const Vec3Array& chord, Index e, Real kinkCos) {
   const Yarn& y = f.yarns[f.elemYarn[e]];
-  const Vec3 t = chord(f, e);
-  Real c = 1;
-  if (e > y.firstElem) c = std::min(c, chord(f, e - 1).dot(t));
-  if (e + 1 < y.firstElem + y.nElems) c = std::min(c, chord(f, e + 1).dot(t));
-  return c;
-}
-
-// The CP e and its neighbours in its yarn are alive: the line on e reads their nodes.
-bool CrossingContacts::stencilAlive(const Fabric& f, Index e) const {
-  const Yarn& y = f.yarns[f.elemYarn[e]];
-  for (Index k = std::max(e - 1, y.firstElem); k <= std::min(e + 1, y.firstElem + y.nElems - 1); ++k)
-    if (!f.alive[k]) return false;
-  return true;
+  const Index lo = std::max(e - 1, y.firstElem), hi = std::min(e + 1, y.firstElem + y.nElems - 1);
+  int why = 0;
+  for (Index k = lo; k <= hi; ++k) {
+    if (!f.alive[k]) return 1 + static_cast<int>(HandBack::Break);
+    if (chord[k].dot(chord[e]) < kinkCos) why = 1 + static_cast<int>(HandBack::Kink);
+  }
+  return why;
 }
 
 // The CPs of each yarn whose rest-length arc comes within the other yarn's widest half-width (at
@@ -62,7 +54,8 @@ void CrossingContacts::footprint(const Fabric& f, const Crossing& x, const Conta
                                  Index& b0, Index& b1) const {
   const auto run = [&](const YarnPlace& q, const YarnPlace& other, Index& lo, Index& hi) {
     const Index node = f.elem0[other.cp] + (other.s < 0.5 ? 0 : 1);
-    const Real reach = kFootprintStretch * semiAxes(f.secRadius[node], p.mcd, p.rule).a + p.margin;
+    const Real reach = kFootprintStretch * semiAxes(f.secRadius[node], p.mcd, p.rule).a + p.margin +
+                       kFootprintSlide * f.restLength[q.cp];
     const Yarn& y = f.yarns[f.elemYarn[q.cp]];
     lo = hi = q.cp;
     for (Real d = q.s * f.restLength[q.cp]; lo > y.firstElem && d < reach; d += f.restLength[lo]) --lo;
@@ -82,58 +75,51 @@ void CrossingContacts::handBack(Index id, HandBack why, std::vector<std::uint8_t
   ++counts.handedBack[static_cast<int>(why)];
 }
 
-bool CrossingContacts::track(const Fabric& f, const ContactParams& p, std::vector<std::uint8_t>& renew) {
+bool CrossingContacts::track(const Fabric& f, const ContactParams& p, const Vec3Array& chord,
+                             std::vector<std::uint8_t>& renew) {
   const Index n = static_cast<Index>(all_.size());
   gone_.assign(all_.size(), 0);
   returned_.clear();
   bool grew = false;
   for (Index id = 0; id < n; ++id) {
     Crossing& x = all_[id];
-    if (!stencilAlive(f, x.a.cp) || !stencilAlive(f, x.b.cp)) {
-      handBack(id, HandBack::Break, renew);
-      continue;
-    }
+    // One Newton step from the last step's closest points: they move far less than a CP a step, so
+    // one step keeps them within (their motion)^2 / (the lines' curvature radius) of the exact ones.
     YarnPlace a = x.a, b = x.b;
-    Real moved = 0, travel = 0;
-    for (int k = 0; k < kTrackSteps; ++k) {
-      moved = closestStep(f, a, b);
-      if (moved < 0) break;
-      travel += moved;
-      if (moved <= kConverged) break;
-    }
+    Real apart = 0;
+    const Real moved = closestStep(f, a, b, &apart);
     if (moved < 0) {
       handBack(id, moved == kLeftYarn ? HandBack::Slide : HandBack::Turn, renew);
       continue;
     }
     // The closest points jumped rather than slid (a quarter CP in a step is thousands of m/s: the
     // lines' closest approach moved to another place, a kinked or folded piece's).
-    if (travel > kJump * std::min(f.restLength[x.a.cp], f.restLength[x.b.cp])) {
+    if (moved > kJump * std::min(f.restLength[x.a.cp], f.restLength[x.b.cp])) {
       handBack(id, HandBack::Slide, renew);
       continue;
     }
     canonical(f, a), canonical(f, b);
-    if (!stencilAlive(f, a.cp) || !stencilAlive(f, b.cp)) {
-      handBack(id, HandBack::Break, renew);
+    if (const int why = std::max(usable(f, chord, a.cp, kKinkCos), usable(f, chord, b.cp, kKinkCos)); why > 0) {
+      handBack(id, why == 1 + static_cast<int>(HandBack::Break) ? HandBack::Break : HandBack::Kink, renew);
       continue;
     }
-    if (std::abs(chord(f, a.cp).dot(chord(f, b.cp))) > kTurnCos) {
+    if (std::abs(chord[a.cp].dot(chord[b.cp])) > kTurnCos) {
       handBack(id, HandBack::Turn, renew);
       continue;
     }
-    if (std::min(straightness(f, a.cp), straightness(f, b.cp)) < kKinkCos) {
-      handBack(id, HandBack::Kink, renew);
-      continue;
-    }
-    const Real apart = (yarnCurveAt(f, b.cp, b.s).x - yarnCurveAt(f, a.cp, a.s).x).norm() -
-                       semiAxesAt(f, a.cp, a.s, p.rule).b - semiAxesAt(f, b.cp, b.s, p.rule).b;
     const Index na = f.elem0[a.cp] + (a.s < 0.5 ? 0 : 1), nb = f.elem0[b.cp] + (b.s < 0.5 ? 0 : 1);
-    if (apart > f.secRadius[na] + f.secRadius[nb]) {
+    if (apart - semiAxesAt(f, a.cp, a.s, p.rule).b - semiAxesAt(f, b.cp, b.s, p.rule).b >
+        f.secRadius[na] + f.secRadius[nb]) {
       handBack(id, HandBack::Separation, renew);
       continue;
     }
-    x.a = a, x.b = b;
+    const bool same = a.cp == x.a.cp && b.cp == x.b.cp && std::abs(a.s - x.fsA) <= kFootprintSlide &&
+                      std::abs(b.s - x.fsB) <= kFootprintSlide;
+    x.a = a, x.b = b, x.apart = apart;
+    if (same) continue;  // its footprint (drawn kFootprintSlide wider) still holds
     Index a0, a1, b0, b1;
     footprint(f, x, p, a0, a1, b0, b1);
+    x.fsA = a.s, x.fsB = b.s;
     if (a0 == x.fa0 && a1 == x.fa1 && b0 == x.fb0 && b1 == x.fb1) continue;
     // The footprint moved: the CPs it left return to the general pipeline, those it took leave it.
     foot_.remove(id, x.fa0, x.fa1, x.fb0, x.fb1);
@@ -170,30 +156,31 @@ bool CrossingContacts::track(const Fabric& f, const ContactParams& p, std::vecto
   return grew;
 }
 
-bool CrossingContacts::form(const Fabric& f, const std::vector<CPContact>& contacts, const ContactParams& p) {
+bool CrossingContacts::form(const Fabric& f, const std::vector<CPContact>& contacts, const ContactParams& p,
+                            const Vec3Array& chord) {
   bool any = false;
   for (const CPContact& c : contacts) {
     if (c.kind != ContactKind::Cross || f.elemYarn[c.cpA] == f.elemYarn[c.cpB]) continue;
     if (foot_.covers(c.cpA, c.cpB)) continue;  // a crossing formed from an earlier contact of the step
-    if (std::abs(chord(f, c.cpA).dot(chord(f, c.cpB))) > kFormCos) continue;
-    if (!stencilAlive(f, c.cpA) || !stencilAlive(f, c.cpB)) continue;
+    if (std::abs(chord[c.cpA].dot(chord[c.cpB])) > kFormCos) continue;
+    if (usable(f, chord, c.cpA, kFormKinkCos) || usable(f, chord, c.cpB, kFormKinkCos)) continue;
     Crossing x;
     x.a = {c.cpA, c.sA}, x.b = {c.cpB, c.sB};
     if (!closestPlaces(f, x.a, x.b, kConverged, kFormSteps)) continue;
     canonical(f, x.a), canonical(f, x.b);
-    if (!stencilAlive(f, x.a.cp) || !stencilAlive(f, x.b.cp) || foot_.covers(x.a.cp, x.b.cp)) continue;
-    if (std::abs(chord(f, x.a.cp).dot(chord(f, x.b.cp))) > kFormCos) continue;
-    if (std::min(straightness(f, x.a.cp), straightness(f, x.b.cp)) < kFormKinkCos) continue;
-    // The lines' points on the contact's side and no closer than its chords: else the general
-    // pipeline keeps the pair.
+    if (foot_.covers(x.a.cp, x.b.cp) || std::abs(chord[x.a.cp].dot(chord[x.b.cp])) > kFormCos) continue;
+    if (usable(f, chord, x.a.cp, kFormKinkCos) || usable(f, chord, x.b.cp, kFormKinkCos)) continue;
+    // The lines' points on the contact's side: else the general pipeline keeps the pair.
     CPContact g;
     crossingGap(f, x.a.cp, x.a.s, x.b.cp, x.b.s, p.rule, c.normal, g);
-    if (g.gap + g.hA + g.hB < 0 || g.gap < c.gap - kFormSlack * (g.hA + g.hB)) continue;
+    if (g.gap + g.hA + g.hB < 0) continue;
     footprint(f, x, p, x.fa0, x.fa1, x.fb0, x.fb1);
     if (!foot_.room(x.fa0, x.fa1, x.fb0, x.fb1)) continue;
+    x.fsA = x.a.s, x.fsB = x.b.s;
     x.normal = g.normal;  // the pair's side, as its contact holds it
-    // The measure memory holds the crossing's gap at the chords' where the lines read less (they
-    // may cut inside a kinked chord): the crossing takes over without a new overlap.
+    // The measure memory holds the crossing's gap at the chords' where the lines read less (their
+    // rounded corners cut inside the chords by up to lambda sin(phi / 2) / 2 a yarn): the crossing
+    // takes over without a new overlap.
     const Real r = g.gap + g.hA + g.hB, least = std::min(c.gap, Real(0));
     if (g.gap < least) x.measure = r - least;
     foot_.add(static_cast<Index>(all_.size()), x.fa0, x.fa1, x.fb0, x.fb1);
@@ -228,6 +215,10 @@ void CrossingContacts::measureOne(const Fabric& f, Index id, const ContactParams
   if (x.measure >= 0) capMeasure(c, x.measure);
   x.normal = c.normal, x.measure = c.hA + c.hB;
   c.crossing = id, c.warm = x.lambda;
+  // What the lines' distance lost as the places moved to this step's closest points: the next
+  // step's tracking will likely lose as much, which the rows hold back (CPContact::drift).
+  const Real r = c.gap + c.hA + c.hB;
+  c.drift = x.apart > r ? x.apart - r : 0.0;
 }
 
 void CrossingContacts::keepImpulses(const std::vector<CPContact>& contacts, const std::vector<Real>& lambda) {
@@ -248,6 +239,7 @@ void CrossingContacts::set(const Fabric& f, const std::vector<Crossing>& all, co
   for (const Crossing& x : all) {
     Crossing y = x;
     footprint(f, y, p, y.fa0, y.fa1, y.fb0, y.fb1);
+    y.fsA = y.a.s, y.fsB = y.b.s;
     if (!foot_.room(y.fa0, y.fa1, y.fb0, y.fb1))
       throw ParameterError("state", "crossings crowding a CP", "at most 8 crossings per CP");
     foot_.add(static_cast<Index>(all_.size()), y.fa0, y.fa1, y.fb0, y.fb1);

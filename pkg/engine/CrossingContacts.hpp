@@ -26,10 +26,10 @@
 // After the general narrow phase (form): a contact of two yarns' CPs that cross steeply (kFormDeg,
 // above kTurnDeg: hysteresis), whose chains turn by at most kFormKinkDeg there, whose CPs and
 // neighbours are alive and whose pair no crossing covers
-// forms a crossing at the curves' closest points near it, if they lie on the contact's side and
-// read no less gap than its chords (within kFormSlack of the measure): a built weave's crossings at
-// the first step, a crossing again once its yarns return. Its chord pairs' contacts leave that
-// step's list.
+// forms a crossing at the lines' closest points near it, if they lie on the contact's side, its
+// measure memory holding its gap at the contact's where the lines read less: a built weave's
+// crossings at the first step, a crossing again once its yarns return. Its chord pairs' contacts
+// leave that step's list.
 // The crossings' contacts (measure) are listed, like any, when they can close within the step.
 #pragma once
 #include "collider/CandidatePairs.hpp"
@@ -48,6 +48,8 @@ struct Crossing {
   Real measure = -1;            ///< its sections' measure hA + hB at the last step [m] (< 0: none yet)
   Real lambda = 0;              ///< its row's normal impulse at the last step [N s] (warm start)
   Index fa0 = 0, fa1 = -1, fb0 = 0, fb1 = -1;  ///< its footprint: CPs [fa0, fa1] of A, [fb0, fb1] of B
+  Real fsA = 0, fsB = 0;        ///< the places' s the footprint was drawn at
+  Real apart = 0;               ///< the lines' distance at the last places, at the last track's positions [m]
 };
 
 enum class HandBack : std::uint8_t { Break = 0, Separation = 1, Turn = 2, Slide = 3, Kink = 4 };
@@ -74,7 +76,7 @@ class CrossingContacts {
   /// A crossing is handed back where a chain turns by more than this at a node of the point's CP
   /// [deg], and formed only at kFormKinkDeg or less: a built weave's chains turn by 2 x the crimp
   /// angle at a crossing node (16 degrees in KM2 706 at one CP per span).
-  static constexpr Real kKinkDeg = 45, kFormKinkDeg = 30;
+  static constexpr Real kKinkDeg = 35, kFormKinkDeg = 25;
 
   /// No crossings, for fabric f's CPs.
   void reset(const Fabric& f);
@@ -88,10 +90,11 @@ class CrossingContacts {
   /// renew[e] = 1 for each CP of a footprint that shrank or went (their pairs return to the general
   /// pipeline: the broad phase collides them again). Returns true when a footprint moved onto new
   /// CPs (their pairs must leave the candidate list: exclude).
-  bool track(const Fabric& f, const ContactParams& p, std::vector<std::uint8_t>& renew);
+  /// `chord`: every CP's unit chord at the current positions.
+  bool track(const Fabric& f, const ContactParams& p, const Vec3Array& chord, std::vector<std::uint8_t>& renew);
   /// After the general narrow phase: crossings formed from its contacts (above). Returns true when
   /// one formed.
-  bool form(const Fabric& f, const std::vector<CPContact>& contacts, const ContactParams& p);
+  bool form(const Fabric& f, const std::vector<CPContact>& contacts, const ContactParams& p, const Vec3Array& chord);
   /// Removes from `pairs` (or contacts) those a crossing covers, keeping the order.
   void exclude(std::vector<CPPair>& pairs) const;
   void exclude(std::vector<CPContact>& contacts) const;
@@ -115,8 +118,7 @@ class CrossingContacts {
   void measureOne(const Fabric& f, Index id, const ContactParams& p, CPContact& c);
   void footprint(const Fabric& f, const Crossing& x, const ContactParams& p, Index& a0, Index& a1, Index& b0,
                  Index& b1) const;
-  bool stencilAlive(const Fabric& f, Index e) const;
-  static Real straightness(const Fabric& f, Index e);
+  static int usable(const Fabric& f, const Vec3Array& chord, Index e, Real kinkCos);
   void handBack(Index id, HandBack why, std::vector<std::uint8_t>& renew);
   std::vector<Crossing> all_;
   std::vector<std::uint8_t> gone_;  // track: the crossings handed back this step

@@ -62,8 +62,17 @@ struct CPContact {
   SideAnchor anchor = SideAnchor::A;
   /// Kind Crossing: the persistent crossing it measures (engine/CrossingContacts), else -1.
   Index crossing = -1;
+  /// Kind Crossing: its lines' node weights at its places, fixed for the step (A's first, as
+  /// GapFunction's contactStencil gives them: A's negative): nStencil nodes, nStencilA of them A's.
+  std::int8_t nStencil = 0, nStencilA = 0;
+  Index stencilNode[6] = {0, 0, 0, 0, 0, 0};
+  Real stencilW[6] = {0, 0, 0, 0, 0, 0};
   /// Normal impulse its row starts from [N s] (a persistent crossing's last one: warm start).
   Real warm = 0;
+  /// Gap its row holds back beyond `gap` [m] >= 0: a persistent crossing's distance lost as its
+  /// places moved to the closest points of this step (they move with the lines' shape, and the
+  /// distance at the new ones is the smaller), which the next step's tracking will lose again.
+  Real drift = 0;
 };
 
 /// Static contact of CPs a < b: true (and `out`) when their boxes overlap. The boxes give the normal

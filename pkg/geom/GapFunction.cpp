@@ -275,12 +275,15 @@ int pairGaps(const Fabric& f, Index a, Index b, bool side, SectionRule rule, con
 }
 
 namespace {
-// The crossing's g at its held places: the curves' points, the normal on the remembered side (the
-// curves cannot pass each other's ends: the crossing hands itself back first), and with `sections`
-// the half-thicknesses at the places, capped by c.hCap (the measure memory), else the held ones.
+// The crossing's g at its held places: the lines' points (from the stencil's weights), the normal on
+// the remembered side (the lines cannot pass each other's ends: the crossing hands itself back
+// first), and with `sections` the half-thicknesses at the places, capped by c.hCap (the measure
+// memory), else the held ones.
 void measureCrossing(const Fabric& f, CPContact& c, SectionRule rule, bool sections) {
-  const CurvePoint A = yarnCurveAt(f, c.cpA, c.sA), B = yarnCurveAt(f, c.cpB, c.sB);
-  const Vec3 d = B.x - A.x;
+  Vec3 A = Vec3::Zero(), B = Vec3::Zero();
+  for (int k = 0; k < c.nStencilA; ++k) A -= c.stencilW[k] * f.pos[c.stencilNode[k]];  // A's weights are negative
+  for (int k = c.nStencilA; k < c.nStencil; ++k) B += c.stencilW[k] * f.pos[c.stencilNode[k]];
+  const Vec3 d = B - A;
   const Real len = d.norm();
   Real r = 0;
   if (len > kTinyDistance) {
@@ -288,30 +291,36 @@ void measureCrossing(const Fabric& f, CPContact& c, SectionRule rule, bool secti
     c.normal = through ? Vec3(-d / len) : Vec3(d / len), r = through ? -len : len;
   }
   if (sections) {
-    c.hDir = supportDirection(c.normal, A.d1.normalized(), B.d1.normalized(), false);
+    // The half-thicknesses whatever the direction: it only turns a still-circular section to face
+    // it when it flattens (SectionFlattening), and between a crossing's lines' closest points the
+    // normal is the yarns' common normal.
+    c.hDir = c.normal;
     c.hA = semiAxesAt(f, c.cpA, c.sA, rule).b, c.hB = semiAxesAt(f, c.cpB, c.sB, rule).b;
     const Real H = c.hA + c.hB;
     c.hHeld = H > c.hCap ? H - c.hCap : 0.0;
     if (H > c.hCap) c.hA *= c.hCap / H, c.hB *= c.hCap / H;
   }
   c.gap = r - c.hA - c.hB;
-  c.point = A.x + (c.hA + 0.5 * c.gap) * c.normal;  // half way between the two surfaces
+  c.point = A + (c.hA + 0.5 * c.gap) * c.normal;  // half way between the two surfaces
 }
 }  // namespace
 
 void crossingGap(const Fabric& f, Index a, Real s, Index b, Real t, SectionRule rule, const Vec3& orient,
                  CPContact& out) {
-  out = CPContact();
   out.cpA = a, out.cpB = b, out.sA = s, out.sB = t, out.kind = ContactKind::Crossing;
-  out.normal = orient, out.sectional = true;
+  out.normal = orient, out.sectional = true, out.hCap = INFINITY, out.boxDepth = 0, out.time = 0;
+  out.crossing = -1, out.warm = 0, out.drift = 0;
+  const int m = yarnCurveWeights(f, a, s, out.stencilNode, out.stencilW);
+  for (int k = 0; k < m; ++k) out.stencilW[k] = -out.stencilW[k];
+  out.nStencilA = static_cast<std::int8_t>(m);
+  out.nStencil = static_cast<std::int8_t>(m + yarnCurveWeights(f, b, t, out.stencilNode + m, out.stencilW + m));
   measureCrossing(f, out, rule, true);
 }
 
 int contactStencil(const Fabric& f, const CPContact& c, Index node[kMaxStencil], Real w[kMaxStencil]) {
   if (c.kind == ContactKind::Crossing) {
-    const int m = yarnCurveWeights(f, c.cpA, c.sA, node, w);
-    for (int k = 0; k < m; ++k) w[k] = -w[k];
-    return m + yarnCurveWeights(f, c.cpB, c.sB, node + m, w + m);
+    for (int k = 0; k < c.nStencil; ++k) node[k] = c.stencilNode[k], w[k] = c.stencilW[k];
+    return c.nStencil;
   }
   node[0] = f.elem0[c.cpA], node[1] = node[0] + 1, node[2] = f.elem0[c.cpB], node[3] = node[2] + 1;
   w[0] = -(1 - c.sA), w[1] = -c.sA, w[2] = 1 - c.sB, w[3] = c.sB;

@@ -142,7 +142,8 @@ void crossingGap(const Fabric& f, Index a, Real s, Index b, Real t, SectionRule 
 constexpr int kMaxStencil = 6;
 /// The nodes of contact c's gap and their weights: dg/dx_k = w_k n (A's negative, B's positive).
 /// A CP pair: its four nodes with the barycentric weights (1 - sA, sA, 1 - sB, sB); a persistent
-/// crossing: the two lines' weights (YarnCurve.hpp), two or three nodes each. Returns the count.
+/// crossing: the two lines' weights (YarnCurve.hpp), two or three nodes each, as crossingGap kept
+/// them in the contact. Returns the count.
 int contactStencil(const Fabric& f, const CPContact& c, Index node[kMaxStencil], Real w[kMaxStencil]);
 
 /// Measures contact c again at the current positions: closest points (Cross, and a Side pair's

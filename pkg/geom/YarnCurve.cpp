@@ -94,9 +94,10 @@ bool walkAlong(const Fabric& f, YarnPlace& p, Real ds) {
   return true;
 }
 
-Real closestStep(const Fabric& f, YarnPlace& a, YarnPlace& b) {
+Real closestStep(const Fabric& f, YarnPlace& a, YarnPlace& b, Real* distance) {
   const CurvePoint A = yarnCurveAt(f, a.cp, a.s), B = yarnCurveAt(f, b.cp, b.s);
   const Vec3 d = B.x - A.x;
+  if (distance) *distance = d.norm();
   // Gradient and Hessian of |d|^2 / 2 in (s, t).
   const Real gs = -A.d1.dot(d), gt = B.d1.dot(d);
   const Real hss = A.d1.squaredNorm() - A.d2.dot(d), htt = B.d1.squaredNorm() + B.d2.dot(d), hst = -A.d1.dot(B.d1);

@@ -28,7 +28,7 @@ struct YarnPlace {
 /// Each inner node's corner is rounded over kBlend times its section's rest radius along each chord
 /// (20 um in KM2 706: the quadrant points of a built crossing, 16 um off the node, lie within it, so
 /// its curves come closest at the node), at most kBlendMax of the shorter CP.
-constexpr Real kBlend = 0.4, kBlendMax = 0.4;
+constexpr Real kBlend = 0.25, kBlendMax = 0.4;
 
 /// The line on CP e at s: position and its first and second derivatives in s.
 struct CurvePoint {
@@ -55,7 +55,8 @@ constexpr Real kNoStep = -1, kLeftYarn = -2;
 /// |C_B(t) - C_A(s)|^2 / 2), each parameter's step capped at half a CP; the places walk into the
 /// neighbouring CPs where they leave theirs. Returns the distance the two places moved along their
 /// lines [m] (the step's size), or kNoStep / kLeftYarn (the places then unchanged, or at the end).
-Real closestStep(const Fabric& f, YarnPlace& a, YarnPlace& b);
+/// `distance` (may be null): the lines' distance at the places the step started from [m].
+Real closestStep(const Fabric& f, YarnPlace& a, YarnPlace& b, Real* distance = nullptr);
 
 /// closestStep repeated until the places move less than `tol` [m] or `maxSteps` were made. Returns
 /// false when a step is undefined, a place leaves its yarn or it did not converge.

@@ -93,7 +93,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     r.vn0 = relativeVelocity(f, r.node, r.w, r.n).dot(r.normal);
     // Approach the room absorbs: the gap, and what flattening can still take, unless the contact is
     // still overlapping after the flattening passes (flattening has stopped working for it).
-    const Real gap = contacts[c].gap;
+    const Real gap = contacts[c].gap - contacts[c].drift;
     Real allowed = std::max(gap, Real(0)) / H;
     if (r.vn0 < -allowed - p.tolerance) {  // neither separating, resting (Eq. 4), nor within the gap
       allowed = (gap < 0 ? 0.0 : gap + capacity(contacts[c])) / H;
@@ -108,7 +108,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     r.target = -allowed;
     // A persistent crossing's row starts from its last impulse (the warm start; applied below).
     r.lambda = contacts[c].warm > 0 ? contacts[c].warm : 0.0, r.lambdaT.setZero(), r.body = -1, r.arm.setZero();
-    r.contact = c;
+    r.kick.setZero(), r.frictionTaken = 0, r.contact = c;
     hasRow_[c] = 1;
   });
   yarnRows_.clear();
@@ -117,6 +117,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   bodyRows_.clear();
   for (const BodyContact& c : bodyContacts) {
     Row r;
+    r.lambda = 0, r.lambdaT.setZero(), r.kick.setZero(), r.frictionTaken = 0, r.contact = -1;
     r.node[0] = f.elem0[c.cp], r.node[1] = r.node[0] + 1, r.n = 2;
     r.w[0] = -(1 - c.s), r.w[1] = -c.s;
     r.normal = c.normal;
@@ -354,10 +355,29 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
       q.n = r.n, q.normal = r.normal, q.target = r.target, q.invK = r.invK, q.lambda = r.lambda, q.body = r.body >= 0;
     });
   }
-  // The tail's active set (below): each node's and each row's last update, on one counter.
-  if (nodeWrite_.size() != static_cast<std::size_t>(f.nNodes())) nodeWrite_.assign(f.nNodes(), writes_);
-  rowWrite_.assign(rows_.size(), -1);
+  // The tail's active set (below): each node's tail rows (CSR), and a bit per tail row: it is to be
+  // updated (every row for the first sweep).
+  const Index tailStart = start_[RowColouring::kColours], tailRows = nRows - tailStart;
+  const auto nodesOfRow = [&](Index k, const Index*& node) {
+    if (packed && !packed_[k].body) return node = packed_[k].node, packed_[k].n;
+    return node = rows_[k].node, rows_[k].n;
+  };
+  nodeStart_.assign(f.pos.size() + 1, 0);
+  for (Index k = tailStart; k < nRows; ++k) {
+    const Index* node;
+    for (int q = 0, n = nodesOfRow(k, node); q < n; ++q) ++nodeStart_[node[q] + 1];
+  }
+  for (std::size_t i = 1; i < nodeStart_.size(); ++i) nodeStart_[i] += nodeStart_[i - 1];
+  nodeRows_.resize(static_cast<std::size_t>(nodeStart_.back()));
+  fill_.assign(nodeStart_.begin(), nodeStart_.end() - 1);
+  for (Index k = tailStart; k < nRows; ++k) {
+    const Index* node;
+    for (int q = 0, n = nodesOfRow(k, node); q < n; ++q) nodeRows_[fill_[node[q]]++] = k - tailStart;
+  }
+  dirty_.assign(static_cast<std::size_t>((tailRows + 63) / 64), ~std::uint64_t(0));
+  if (tailRows % 64) dirty_.back() = (std::uint64_t(1) << (tailRows % 64)) - 1;
   skipped_ = 0;
+  std::fill(miss_.begin() + tailStart, miss_.end(), Real(0));
   int sweeps = p.maxIterations;
   for (int it = 0; it < p.maxIterations; ++it) {
     const bool split = nThreads > 1 && (it == 0 || (it > 1 && seconds[0] <= seconds[1]));
@@ -393,33 +413,47 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
       for (Real w : groupWorst) worst = std::max(worst, w);
     else
       for (Index k = 0; k < tail; ++k) worst = std::max(worst, miss_[k]);  // the colours' rows
-    for (Index k = tail; k < nRows; ++k) {
-      const bool onBody = packed ? packed_[k].body : rows_[k].body >= 0;
-      const Index* node = packed ? packed_[k].node : rows_[k].node;
-      const int n = packed ? packed_[k].n : rows_[k].n;
-      // The serial order's active set: a row whose nodes no other row has changed since its own
-      // last update would only repeat it (its miss was taken to its target, or it separates): it
-      // is skipped, its miss 0. Rows on a body (they share its velocities) are always updated.
-      if (it > 0 && !onBody && std::all_of(node, node + n, [&](Index i) { return nodeWrite_[i] <= rowWrite_[k]; })) {
-        miss_[k] = 0;
-        ++skipped_;
-        continue;
+    // The serial order's active set: a row no other row has changed a node of since its own last
+    // update would only repeat it (its miss was taken to its target, or it separates): it is
+    // skipped, its miss 0. An update that changes velocities marks the rows of its nodes (those
+    // after it in this sweep, those before in the next); rows on a body (they share its
+    // velocities) are updated every sweep.
+    if (it > 0) {
+      dirty_.swap(next_);
+      for (Index k = tail; k < nRows; ++k)
+        if (packed ? packed_[k].body : rows_[k].body >= 0) dirty_[(k - tailStart) >> 6] |= std::uint64_t(1) << ((k - tailStart) & 63);
+    }
+    next_.assign(dirty_.size(), 0);
+    Index updated = 0;
+    for (std::size_t word = 0; word < dirty_.size(); ++word)
+      while (dirty_[word]) {
+        const int bit = __builtin_ctzll(dirty_[word]);
+        dirty_[word] &= dirty_[word] - 1;
+        const Index k = tailStart + static_cast<Index>(word * 64 + bit);
+        ++updated;
+        const bool onBody = packed ? packed_[k].body : rows_[k].body >= 0;
+        const Real before = packed && !onBody ? packed_[k].lambda : rows_[k].lambda;
+        const Vec3 beforeT = packed ? Vec3::Zero() : rows_[k].lambdaT;
+        miss_[k] = packed && !onBody ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
+        worst = std::max(worst, miss_[k]);
+        // An update that moved the row's velocity by less than a tenth of the tolerance wakes none of
+        // its neighbours: it moves theirs by less (a node's share of it), and they stay within the
+        // tolerance unless ten such updates add up (the final misses are measured, not assumed).
+        const Real dLambda = std::abs((packed && !onBody ? packed_[k].lambda : rows_[k].lambda) - before);
+        const Real invK = packed && !onBody ? packed_[k].invK : rows_[k].invK;
+        const bool wrote = dLambda > kWake * solverTol_ * invK ||
+                           (!packed && (rows_[k].lambdaT - beforeT).norm() > kWake * solverTol_ * invK);
+        if (!wrote) continue;
+        const Index* node;
+        for (int q = 0, n = nodesOfRow(k, node); q < n; ++q)
+          for (Index j = nodeStart_[node[q]]; j < nodeStart_[node[q] + 1]; ++j)
+            if (const Index r = nodeRows_[j]; r != k - tailStart)
+              (r > k - tailStart ? dirty_ : next_)[r >> 6] |= std::uint64_t(1) << (r & 63);
       }
-      const Real before = packed && !onBody ? packed_[k].lambda : rows_[k].lambda;
-      const Vec3 beforeT = packed ? Vec3::Zero() : rows_[k].lambdaT;
-      miss_[k] = packed && !onBody ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
-      worst = std::max(worst, miss_[k]);
-      // An update that moved the row's velocity by less than a thousandth of the tolerance (a
-      // resting row's rounding) wakes none of its neighbours.
-      const Real dLambda = std::abs((packed && !onBody ? packed_[k].lambda : rows_[k].lambda) - before);
-      const Real invK = packed && !onBody ? packed_[k].invK : rows_[k].invK;
-      const bool wrote = onBody || dLambda > 1e-3 * solverTol_ * invK ||
-                         (!packed && (rows_[k].lambdaT - beforeT).norm() > 1e-3 * solverTol_ * invK);
-      if (wrote) {
-        ++writes_;
-        for (int q = 0; q < n; ++q) nodeWrite_[node[q]] = writes_;
-      }
-      rowWrite_[k] = writes_;
+    skipped_ += tailRows - updated;
+    if (tail < nRows && updated == 0) {  // nothing left to update: every row as its last update left it
+      sweeps = it + 1;
+      break;
     }
     if (worst <= solverTol_) {
       sweeps = it + 1;

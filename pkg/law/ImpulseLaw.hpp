@@ -70,6 +70,9 @@ class ImpulseLaw {
  public:
   /// Rows of a colour below which it is solved on one thread (a parallel region costs a few us).
   static constexpr Index kRowGrain = 256;
+  /// The sweeps' active set (sequential order): an update that changes its row's velocity by more
+  /// than this fraction of the solve's tolerance has the rows of its nodes updated again.
+  static constexpr Real kWake = 1;
 
   /// What flattening can still take along a contact's normal (both CPs) [m]; asked only for contacts
   /// that approach faster than their gap alone allows.
@@ -102,21 +105,23 @@ class ImpulseLaw {
   static Real correctPositions(Fabric& f, const std::vector<CPContact>& contacts, const ContactParams& p);
 
  private:
+  // Trivially constructible (every field set where a row is made): a contact's slot is made for each
+  // contact each step, and initialising them all cost 4 % of the default impact.
   struct Row {
     Index node[kMaxStencil];
-    int n = 0;          // nodes (GapFunction's contactStencil; 2 on a body)
-    int body = -1;      // B side: a rigid body (the nodes are the CP's two), at arm r from its centre;
-                        // beside the nodes: the colouring and the blocks read both, and nothing else
+    int n;              // nodes (GapFunction's contactStencil; 2 on a body)
+    int body;           // B side: a rigid body (the nodes are the CP's two), at arm r from its centre
+                        // (-1: none); beside the nodes: the colouring and the blocks read both
     Real w[kMaxStencil];  // the stencil's weights (a CP pair: -(1-sA), -sA, (1-sB), sB): vn = sum w_k v_k . normal
     Vec3 normal;
     Real target, invK;  // invK = m_eff = 1 / sum w^2/m
     Real vn0;           // normal velocity before the impulses [m/s]
-    Real lambda = 0;    // accumulated normal impulse [N s]
-    Vec3 lambdaT = Vec3::Zero();
-    Vec3 kick = Vec3::Zero();  // (dt/2) sum w_k a_k of the fabric nodes (friction's energy share) [m/s]
-    Real frictionTaken = 0;    // the tangential parts' energy share over this resolve's sweeps, taken out [J]
-    Vec3 arm = Vec3::Zero();
-    Index contact = -1;  // the contact it is the row of (-1: a body contact)
+    Real lambda;        // accumulated normal impulse [N s]
+    Vec3 lambdaT;
+    Vec3 kick;          // (dt/2) sum w_k a_k of the fabric nodes (friction's energy share) [m/s]
+    Real frictionTaken;  // the tangential parts' energy share over this resolve's sweeps, taken out [J]
+    Vec3 arm;
+    Index contact;      // the contact it is the row of (-1: a body contact)
   };
   // What an update without friction of a row on no body reads and writes, packed (104 B against a
   // Row's 192): a sweep streams every row, and this nearly halves the memory it moves.
@@ -165,10 +170,9 @@ class ImpulseLaw {
   Real dt_ = 0;
   std::vector<Index> touched_;
   std::vector<std::uint8_t> marked_;
-  // The serial tail's active set (solve): a counter of the updates that changed velocities, each
-  // node's value at its last change and each row's at its own last update.
-  std::int64_t writes_ = 0;
-  std::vector<std::int64_t> nodeWrite_, rowWrite_;
+  // The serial tail's active set (solve): each node's tail rows (CSR) and a bit per tail row to update.
+  std::vector<Index> nodeStart_, nodeRows_, fill_;
+  std::vector<std::uint64_t> dirty_, next_;  // this sweep's rows to update (after the one updated), the next sweep's
   long skipped_ = 0;  // row updates the active set skipped in the last solve
   Real solverTol_ = 0;  // the solve's tolerance on a row's miss [m/s] (resolve)
 };

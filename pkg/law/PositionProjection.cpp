@@ -39,6 +39,7 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
   // only the contacts deeper than checkDepth.
   movedNow_.assign(f.nNodes(), 0);
   origin_.resize(f.pos.size());
+  nodeSlotsFor_ = -1;
   // The contacts by colour: those of a colour share no node (law/RowColouring), and a contact reads
   // and moves only its own four nodes, so a colour's contacts are projected at once on the threads
   // with the same bits as one after another. The body contacts (all share the body) follow, in order.
@@ -92,6 +93,12 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
         movedNow_[node[k]] = 1;
       }
   };
+  // The nodes a sweep moved (the sequential order's work list; the books' CPs): from the flags.
+  const auto collectMoved = [&](std::vector<Index>& out) {
+    out.clear();
+    for (Index i = 0; i < f.nNodes(); ++i)
+      if (movedNow_[i]) out.push_back(i);
+  };
   movedAny_.assign(f.nNodes(), 0);
   // One contact's move; returns the overlap beyond allowance + slop it took out (0: no move) [m].
   const auto projectOne = [&](const Slot& slot, bool first) -> Real {
@@ -118,7 +125,7 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     Real K = 0;
     for (int k = 0; k < n; ++k) K += w[k] * w[k] * f.invMass[node[k]];
     if (!(K > 0)) return 0;  // both CPs kinematic
-    const Real dl = share(node, w, n, -C / K);
+    const Real dl = share(node, w, n, -(C - kRebound * slop) / K);
     if (dl == 0) return 0;
     move(node, w, n, dl, c.normal);
     return -C;
@@ -156,8 +163,31 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
       }
       for (Index k = 0; k < tail; ++k) pushes.add(outcome_[k]);
     }
-    // The tail (a contact that found no colour free, or the blocks' seam) in order.
-    for (Index k = tail; k < nc; ++k) pushes.add(outcome_[k] = projectOne(slots_[k], first));
+    // The tail (a contact that found no colour free, or the blocks' seam) in order. After the first
+    // sweep the sequential order (every contact in the tail) takes only the contacts with a node the
+    // sweep before moved, from the nodes' lists of slots: the contacts projectOne would not skip,
+    // in the same order (the same bits), without reading the rest.
+    if (!first && tail == 0 && order == SweepOrder::Sequential) {
+      if (nodeSlotsFor_ != nc) {  // the nodes' slots (CSR), once a second sweep is needed
+        nodeSlotsFor_ = nc;
+        nodeStart_.assign(f.pos.size() + 1, 0);
+        for (Index k = 0; k < nc; ++k)
+          for (int q = 0; q < slots_[k].n; ++q) ++nodeStart_[slots_[k].node[q] + 1];
+        for (std::size_t i = 1; i < nodeStart_.size(); ++i) nodeStart_[i] += nodeStart_[i - 1];
+        nodeSlots_.resize(static_cast<std::size_t>(nodeStart_.back()));
+        std::vector<Index> fill(nodeStart_.begin(), nodeStart_.end() - 1);
+        for (Index k = 0; k < nc; ++k)
+          for (int q = 0; q < slots_[k].n; ++q) nodeSlots_[fill[slots_[k].node[q]]++] = k;
+      }
+      work_.clear();
+      for (Index i : movedBeforeList_)
+        for (Index j = nodeStart_[i]; j < nodeStart_[i + 1]; ++j) work_.push_back(nodeSlots_[j]);
+      std::sort(work_.begin(), work_.end());
+      work_.erase(std::unique(work_.begin(), work_.end()), work_.end());
+      for (Index k : work_) pushes.add(outcome_[k] = projectOne(slots_[k], false));
+    } else {
+      for (Index k = tail; k < nc; ++k) pushes.add(outcome_[k] = projectOne(slots_[k], first));
+    }
     if (pushes.count > 0) rep.pushed += pushes.count, moved = true, rep.overlapLeft = pushes.largest;
     for (BodyContact& c : bodyContacts) {
       if (!f.alive[c.cp]) continue;
@@ -174,7 +204,7 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
       Real K = b.invMass() + rn.dot(invI * rn);
       for (int k = 0; k < 2; ++k) K += w[k] * w[k] * f.invMass[node[k]];
       if (!(K > 0)) continue;  // kinematic CP and body
-      const Real dl = share(node, w, 2, -C / K);
+      const Real dl = share(node, w, 2, -(C - kRebound * slop) / K);
       if (dl == 0) continue;
       move(node, w, 2, dl, c.normal);
       if (b.dynamic()) {
@@ -190,6 +220,7 @@ void PositionProjection::project(Fabric& f, std::vector<CPContact>& contacts, st
     }
     bodyMoved = bodyMovedNow;
     if (!moved) break;
+    collectMoved(movedBeforeList_);
   }
   // A check moves x_n after its forces made the kick: the drift then misses -dF . dx / 2 (the
   // projection after the drift: +dF . dx / 2). dx is taken with the velocities before the rows.

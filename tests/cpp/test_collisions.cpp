@@ -560,6 +560,7 @@ TEST(Collider, NarrowPhaseThreadsChangeNothing) {
     FabricEngine e(buildWeave(p).fabric);
     ContactParams c;
     c.threads = k + 1;
+    c.crossings = Crossings::Chords;  // every CP pair in the general narrow phase (persistent: tests/cpp/test_crossings.cpp)
     e.enableCollisions(c);
     e.collisions()->settle(e.fabric());
     for (const Yarn& y : e.fabric().yarns)
