@@ -688,7 +688,7 @@ BOOST_PYTHON_MODULE(_woven) {
       .def("_section_flattening", +[](FabricEngine& e) { return bytesOf(e.fabric().secFlat); })
       .def("_section_semi_axes", &semiAxesPy)
       // The whole engine as bytes (pkg/engine/Snapshot.hpp; the native YADE plugin's O.save format);
-      // forgets the carried contacts as save_state does.
+      // the collision stage's memory with it, as save_state: taking one changes nothing.
       .def("_same", +[](FabricEngine& a, FabricEngine& b) { return &a == &b; }, (bp::arg("other")))
       .def("_snapshot", +[](FabricEngine& e) {
         const std::string b = engineSnapshot(e);

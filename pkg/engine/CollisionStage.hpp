@@ -142,10 +142,20 @@ class CollisionStage : public StepHook {
   /// impulses gave): the adapter sets them before FabricEngine::step and reads them after.
   std::vector<RigidBody> bodies;
   const std::vector<BodyContact>& bodyContacts() const { return bodyContacts_; }
-  /// Forgets the carried contacts (ContactParams::cacheDistance): every pair is tested at the next
-  /// step. Called when a state is saved or loaded, so that a run continued from a saved state and
-  /// the run that saved it go on bit for bit alike.
+  /// Forgets what the stage carries between steps (persistent crossings, pairs' measure memory,
+  /// carried contacts, the last body contacts): every pair is measured afresh at the next step.
+  /// Called when the parameters change, a last good state is restored, or a state without the
+  /// memory is loaded.
   void invalidateCache();
+  /// What the stage carries between steps, as bytes (engine/StageMemory.cpp): state files and
+  /// snapshots keep it, so that a save changes nothing and a continued run is the saving run.
+  std::string memory() const;
+  /// Takes memory() back for fabric f (as it stands: the state is applied first). Throws
+  /// ParameterError("state") on bytes that are not such memory or do not fit f; returns false,
+  /// changing nothing, for memory of another build's layout (the caller then forgets instead).
+  bool setMemory(const Fabric& f, const std::string& bytes);
+  /// setMemory's checks alone (nothing changes).
+  void checkMemory(const Fabric& f, const std::string& bytes) const;
   /// Largest overlap of body k with any CP in the fabric as it stands [m] (<= 0: clear of it); moves
   /// nothing.
   Real bodyOverlap(Fabric& f, int k);
@@ -226,6 +236,8 @@ class CollisionStage : public StepHook {
     Vec3 x[4];          // the four node positions then [m]
   };
   bool reuse(const Fabric& f, std::size_t k, CPContact& c) const;
+  struct Memory;
+  Memory parseMemory(const Fabric& f, const std::string& bytes) const;
   void remapCache(bool caching, bool gapModel);
   void narrowBodies(const Fabric& f, Real dt);
   /// The flattening passes; with bodyDt >= 0 (a step's dt) the body contacts flatten the sections

@@ -104,6 +104,7 @@ KinematicState FabricEngine::state() const {
   s.alive = f.alive, s.stiffness = f.stiffness, s.damping = f.damping;
   s.booksStarted = dynamics_.booksStarted(), s.springSeen = dynamics_.springSeen(), s.books = dynamics_.books();
   s.breakage = dynamics_.breakage().state();
+  if (collisions_) s.contacts = collisions_->memory();
   return s;
 }
 
@@ -116,13 +117,11 @@ KinematicState FabricEngine::lastGoodState() const {
   s.alive = dynamics_.lastGoodAlive(), s.stiffness = dynamics_.lastGoodStiffness(), s.damping = dynamics_.lastGoodDamping();
   s.books = dynamics_.lastGoodBooks(), s.springSeen = dynamics_.lastGoodSpringSeen(), s.booksStarted = true;
   s.breakage = dynamics_.lastGoodBreakage();
+  s.contacts.clear();  // the stage's memory of the last good step is not kept
   return s;
 }
 
-void FabricEngine::saveState(const std::string& path) {
-  woven::saveState(path, state());
-  if (collisions_) collisions_->invalidateCache();
-}
+void FabricEngine::saveState(const std::string& path) { woven::saveState(path, state()); }
 
 void FabricEngine::checkState(const KinematicState& s) const {
   const Fabric& f = *fabric_;
@@ -154,6 +153,7 @@ void FabricEngine::checkState(const KinematicState& s) const {
     require(ok, "state", e, "a finite stiffness where alive, 0 stiffness and damping where broken (element)");
   }
   Breakage::check(f, s.breakage, s.alive);
+  if (collisions_ && !s.contacts.empty()) collisions_->checkMemory(f, s.contacts);
 }
 
 void FabricEngine::setState(const KinematicState& s) {
@@ -172,7 +172,9 @@ void FabricEngine::setState(const KinematicState& s) {
     f.damping[e] = s.alive[e] ? m.dampingRatio * std::sqrt(K * me) : 0.0;
   }
   dynamics_.restore(s.step, s.time, s.lastDt, s.books, s.booksStarted, s.springSeen, s.breakage);
-  if (collisions_) collisions_->invalidateCache();
+  // The stage's memory goes on as the saving run's; a state without it (or of another build's
+  // layout) is continued as a run that forgot it.
+  if (collisions_ && (s.contacts.empty() || !collisions_->setMemory(f, s.contacts))) collisions_->invalidateCache();
 }
 
 }  // namespace woven

@@ -59,13 +59,12 @@ class FabricEngine {
   const CollisionStage* collisions() const { return collisions_.get(); }
 
   KinematicState state() const;
-  /// Writes the state to `path` (StateIO) and forgets the collision stage's carried contacts, so
-  /// that this run and one loaded from the file continue bit for bit alike.
+  /// Writes the state to `path` (StateIO), the collision stage's memory with it: a pure
+  /// observation, and a run loaded from the file continues bit for bit as this one does.
   void saveState(const std::string& path);
   KinematicState lastGoodState() const;
-  /// Loads a saved state (same node count), bit for bit: positions, velocities, sections (when the
-  /// state has them) and the clock, so the run goes on exactly as the saved one would have (the
-  /// carried contacts are forgotten on both sides: saveState).
+  /// Loads a saved state (same node count), bit for bit: positions, velocities, sections, the clock
+  /// and the collision stage's memory, so the run goes on exactly as the saved one does.
   /// Everything is checked before anything changes (checkState): a refused state leaves the engine
   /// as it was. The energy books, broken elements and breakage state come from the state too.
   void setState(const KinematicState& s);

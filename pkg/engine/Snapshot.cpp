@@ -7,7 +7,10 @@ namespace woven {
 
 namespace {
 
-constexpr char kMagic[8] = {'W', 'O', 'V', 'E', 'N', 'S', 'N', '1'};
+// WOVENSN2 (this build's): the collision stage's memory after the breaks, the substeps and the
+// multi-rate flag always. WOVENSN1 (read): no memory, the substeps and flag only when set.
+constexpr char kMagic[8] = {'W', 'O', 'V', 'E', 'N', 'S', 'N', '2'};
+constexpr char kMagic1[8] = {'W', 'O', 'V', 'E', 'N', 'S', 'N', '1'};
 
 std::uint64_t fnv64(const char* p, std::size_t n) {
   std::uint64_t h = 1469598103934665603ull;
@@ -30,7 +33,7 @@ struct In {
   const std::string& b;
   std::size_t at = 0;
   [[noreturn]] static void fail(const std::string& what) {
-    throw ParameterError("snapshot", what, "bytes written by woven::engineSnapshot (format WOVENSN1)");
+    throw ParameterError("snapshot", what, "bytes written by woven::engineSnapshot (format WOVENSN2 or WOVENSN1)");
   }
   void need(std::size_t n) const {
     if (n > b.size() - at) fail("truncated bytes");
@@ -120,17 +123,16 @@ std::string engineSnapshot(FabricEngine& e) {
   o.put(std::uint8_t(s.booksStarted)), o.put(std::uint8_t(s.springSeen)), o.put(s.books);
   o.put(s.breakage.params), o.vec(s.breakage.strength), o.vec(s.breakage.filtered);
   putBreakEvents(o, s.breakage.log);
-  // Spring substeps only when set: a snapshot of a plain engine has the bytes it had before them.
-  if (e.substeps() > 1) o.put(static_cast<std::int32_t>(e.substeps()));
-  if (e.substeps() > 1 && e.multiRate()) o.put(std::uint8_t(1));  // multi-rate springs only when on: the same rule
+  o.put(static_cast<std::uint64_t>(s.contacts.size()));
+  o.b.append(s.contacts);
+  o.put(static_cast<std::int32_t>(e.substeps())), o.put(std::uint8_t(e.multiRate()));
   o.put(fnv64(o.b.data(), o.b.size()));
-  // As saveState: both this run and the restored one test every pair at their next step.
-  if (CollisionStage* c = e.collisions()) c->invalidateCache();
   return o.b;
 }
 
 std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
-  if (bytes.size() < 16 || std::memcmp(bytes.data(), kMagic, 8) != 0) In::fail("no WOVENSN1 header");
+  const bool sn2 = bytes.size() >= 16 && std::memcmp(bytes.data(), kMagic, 8) == 0;
+  if (!sn2 && (bytes.size() < 16 || std::memcmp(bytes.data(), kMagic1, 8) != 0)) In::fail("no WOVENSN2 or WOVENSN1 header");
   std::uint64_t sum;
   std::memcpy(&sum, bytes.data() + bytes.size() - 8, 8);
   if (sum != fnv64(bytes.data(), bytes.size() - 8)) In::fail("checksum mismatch");
@@ -214,7 +216,17 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
   getBreakEvents(in, s.breakage.log);
   int substeps = 1;
   bool multiRate = false;
-  if (const std::size_t left = in.b.size() - in.at; left == sizeof(std::int32_t) || left == sizeof(std::int32_t) + 1) {
+  if (sn2) {
+    const auto nc = in.get<std::uint64_t>();
+    if (nc > in.b.size() - in.at) In::fail("truncated bytes");
+    s.contacts.assign(in.b.data() + in.at, static_cast<std::size_t>(nc));
+    in.at += static_cast<std::size_t>(nc);
+    substeps = in.get<std::int32_t>();
+    if (substeps < 1 || substeps > 64) In::fail("substeps outside [1, 64]");
+    const auto flag = in.get<std::uint8_t>();
+    if (flag > 1) In::fail("multi-rate flag other than 0 or 1");
+    multiRate = flag == 1;
+  } else if (const std::size_t left = in.b.size() - in.at; left == sizeof(std::int32_t) || left == sizeof(std::int32_t) + 1) {
     substeps = in.get<std::int32_t>();
     if (substeps < 2 || substeps > 64) In::fail("substeps outside [2, 64]");
     if (left > sizeof(std::int32_t) && in.get<std::uint8_t>() != 1) In::fail("multi-rate flag other than 1");

@@ -14,7 +14,9 @@ namespace woven {
 namespace {
 
 const char kMagic3[8] = {'W', 'O', 'V', 'E', 'N', 'S', 'T', '3'};
-constexpr std::uint32_t kVersion = 4;  // 4: the friction book after the other 11 (3 has none)
+// 4: the friction book after the other 11 (3 has none); 5: the collision stage's memory after the
+// breaks (a length and its bytes).
+constexpr std::uint32_t kVersion = 5;
 constexpr std::uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
 
 std::uint64_t fnv(const void* data, std::size_t n, std::uint64_t h = kFnvOffset) {
@@ -60,6 +62,10 @@ class Reader {
     at_ += n * sizeof(T);
   }
   std::size_t at() const { return at_; }
+  void skip(std::size_t n) {
+    need(n);
+    at_ += n;
+  }
   [[noreturn]] void fail(const std::string& what) const { throw ParameterError("state", "'" + path_ + "'", "a woven state file (format 3): " + what); }
   void need(std::size_t n) const {
     if (n > buf_.size() - at_) fail("the file is truncated");
@@ -189,6 +195,8 @@ void saveState(const std::string& path, const KinematicState& s) {
     w.vecs(Vec3Array{ev.position});
     w.put(ev.strain), w.put(ev.rawStrain), w.put(ev.energy);
   }
+  w.put(static_cast<std::int64_t>(s.contacts.size()));
+  w.raw(s.contacts.data(), s.contacts.size());
   w.put(fnv(w.out.data(), w.out.size()));
   writeFileAtomic(path, w.out);
 }
@@ -216,8 +224,8 @@ KinematicState loadState(const std::string& path, long expectNodes) {
   if (buf[7] != '3') r.fail(std::string("format WOVENST") + buf[7] + " is not supported (re-save it with this woven)");
   r.get<std::uint64_t>();  // the magic
   const std::uint32_t version = r.get<std::uint32_t>();
-  if (version != kVersion && version != 3)
-    r.fail("version " + fmt(version) + ", this woven reads versions 3 and " + fmt(kVersion));
+  if (version < 3 || version > kVersion)
+    r.fail("version " + fmt(version) + ", this woven reads versions 3 to " + fmt(kVersion));
   r.get<std::uint32_t>();
   // The checksum first: every later check may then trust the sizes it reads.
   if (buf.size() < 16) r.fail("the file is truncated");
@@ -270,6 +278,12 @@ KinematicState loadState(const std::string& path, long expectNodes) {
     ev.step = r.get<std::int64_t>(), ev.time = r.get<Real>(), ev.yarn = r.get<std::int32_t>(), ev.element = r.get<std::int32_t>();
     for (int k = 0; k < 3; ++k) ev.position[k] = r.get<Real>();
     ev.strain = r.get<Real>(), ev.rawStrain = r.get<Real>(), ev.energy = r.get<Real>();
+  }
+  if (version >= 5) {
+    const std::int64_t nc = r.get<std::int64_t>();
+    if (nc < 0 || static_cast<std::uint64_t>(nc) > buf.size() - r.at()) r.fail("contact memory past the end");
+    s.contacts.assign(buf.data() + r.at(), static_cast<std::size_t>(nc));
+    r.skip(static_cast<std::size_t>(nc));
   }
   r.get<std::uint64_t>();  // the checksum, verified above
   if (r.at() != buf.size()) r.fail(fmt(buf.size() - r.at()) + " trailing bytes after the checksum");

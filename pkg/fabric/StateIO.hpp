@@ -45,6 +45,10 @@ struct KinematicState {
   bool booksStarted = false, springSeen = false;  ///< ChainDynamics: books computed; contact springs booked
   EnergyBooks books;       ///< [J]
   BreakageState breakage;
+  /// The collision stage's memory (CollisionStage::memory: persistent crossings, pairs' measure
+  /// memory, the last body contacts), opaque bytes; empty: none (collisions off, a last good state,
+  /// or a file of version 4 or earlier, whose run then continues as one that forgot it).
+  std::string contacts;
 };
 
 /// 64-bit fingerprint of what a state file must match: counts, yarns (nodes, elements, family,

@@ -80,8 +80,8 @@ def _call(name, *args):
 
 
 def _state_bytes(eng):
-    # save_state also forgets the carried contacts (as load_state does), so the run that goes on
-    # after a save is the same bits as the run continued from it.
+    # The state file holds the collision stage's memory too (persistent crossings, pairs' measure
+    # memory, last body contacts): saving changes nothing, and a loaded run continues as this one.
     with tempfile.TemporaryDirectory(prefix='woven-ckp-') as d:
         p = os.path.join(d, 'engine.state')
         eng.save_state(p)

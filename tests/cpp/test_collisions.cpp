@@ -482,7 +482,7 @@ TEST(NonPenetration, RandomDropsAndPressesOntoALayer) {
 }
 
 // Both contact models: the paper's carried contacts and the gap model's pair memory (side-by-side
-// kind, normal side) are forgotten at a save and a load alike.
+// kind, normal side) travel in the state file (tests/cpp/test_checkpoint.cpp: against the straight run).
 TEST(StateIO, SectionsAndClockRoundTripAndTheRunContinuesBitForBit) {
  for (ContactModel model : {ContactModel::Paper, ContactModel::Gap}) {
   WeaveParams p = km2_706();

@@ -1,0 +1,196 @@
+// What the collision stage carries from one step to the next, as bytes (CollisionStage::memory):
+// the persistent crossings, each CP pair's measure memory (model Gap) or carried contact (model Paper),
+// the body contacts of the last step (the measure memory of the next), the section springs' rest
+// shape and the statistics. State files and snapshots keep it, so that saving a run is a pure
+// observation and a run continued from a save is the saving run, bit for bit (before, both sides
+// forgot the memory at a save: the saving run then differed from the straight one).
+// The crossings and the pair memory go field by field; the carried contacts, body contacts and
+// statistics as their bytes with their size, which another build's layout fails (the memory is then
+// dropped: the state loads, and the run continues as one that forgot it).
+#include "core/Errors.hpp"
+#include "engine/CollisionStage.hpp"
+#include <cstring>
+
+namespace woven {
+
+namespace {
+
+constexpr char kMagic[4] = {'W', 'S', 'M', '1'};
+
+struct Out {
+  std::string b;
+  template <class T>
+  void put(const T& v) { b.append(reinterpret_cast<const char*>(&v), sizeof(T)); }
+  template <class T>
+  void raw(const std::vector<T>& a) {
+    put(static_cast<std::uint64_t>(a.size())), put(static_cast<std::uint64_t>(sizeof(T)));
+    if (!a.empty()) b.append(reinterpret_cast<const char*>(a.data()), a.size() * sizeof(T));
+  }
+};
+
+struct In {
+  const std::string& b;
+  std::size_t at = 0;
+  bool layout = true;  // every raw block had this build's record size
+  [[noreturn]] static void fail(const std::string& what) {
+    throw ParameterError("state", "contact memory: " + what, "the memory a woven collision stage wrote");
+  }
+  template <class T>
+  T get() {
+    if (sizeof(T) > b.size() - at) fail("truncated");
+    T v;
+    std::memcpy(static_cast<void*>(&v), b.data() + at, sizeof(T));
+    at += sizeof(T);
+    return v;
+  }
+  std::uint64_t count(std::size_t least) {
+    const auto n = get<std::uint64_t>();
+    if (n > (b.size() - at) / std::max<std::size_t>(least, 1)) fail("a count past the end");
+    return n;
+  }
+  template <class T>
+  void raw(std::vector<T>& a) {
+    const auto n = get<std::uint64_t>(), size = get<std::uint64_t>();
+    if (size == 0 || n > (b.size() - at) / size) fail("a block past the end");
+    if (size != sizeof(T)) {
+      layout = false, at += n * size, a.clear();
+      return;
+    }
+    a.resize(n);
+    if (n) std::memcpy(static_cast<void*>(a.data()), b.data() + at, n * sizeof(T));
+    at += n * sizeof(T);
+  }
+};
+
+}  // namespace
+
+// The parsed memory, checked against the fabric before anything is applied.
+struct CollisionStage::Memory {
+  std::vector<Crossing> crossings;
+  std::vector<CPPair> keys;  // the pairs of memo / cache, sorted
+  std::vector<PairMemo> memo;
+  std::vector<PairCache> cache;
+  long cacheClock = 0;
+  std::vector<long> sectionStamp;
+  std::size_t heldFor = 0;
+  std::vector<BodyContact> held;
+  std::vector<Real> restFlat;
+  Vec3Array restDir;
+  std::vector<CollisionStats> stats;
+  bool layout = true;
+};
+
+std::string CollisionStage::memory() const {
+  Out o;
+  o.b.append(kMagic, 4);
+  const std::vector<Crossing>& xs = crossings_.crossings();
+  o.put(static_cast<std::uint64_t>(xs.size()));
+  for (const Crossing& x : xs) {
+    o.put(x.a.cp), o.put(x.a.s), o.put(x.b.cp), o.put(x.b.s), o.put(x.normal);
+    o.put(x.measure), o.put(x.lambda), o.put(x.fsA), o.put(x.fsB), o.put(x.apart);
+  }
+  // The pairs with a memory: the gap model's remembered ones, the paper model's valid carried ones.
+  std::vector<std::size_t> kept;
+  for (std::size_t k = 0; k < cachePairs_.size(); ++k)
+    if ((k < memo_.size() && memo_[k].memo) || (k < cache_.size() && cache_[k].valid)) kept.push_back(k);
+  o.put(static_cast<std::uint64_t>(kept.size()));
+  for (std::size_t k : kept) {
+    o.put(cachePairs_[k].a), o.put(cachePairs_[k].b);
+    const PairMemo m = k < memo_.size() ? memo_[k] : PairMemo();
+    o.put(std::uint8_t(m.memo)), o.put(std::uint8_t(m.side)), o.put(std::uint8_t(m.held)), o.put(std::int32_t(m.memoPoints));
+    for (int q = 0; q < 2; ++q) o.put(m.memoS[q]), o.put(m.memoT[q]), o.put(m.memoMeasure[q]), o.put(m.memoNormal[q]);
+  }
+  std::vector<PairCache> cache;
+  if (!cache_.empty())
+    for (std::size_t k : kept) cache.push_back(cache_[k]);
+  o.raw(cache);
+  o.put(static_cast<std::int64_t>(cacheClock_));
+  o.raw(sectionStamp_);
+  o.put(static_cast<std::uint64_t>(bodies.size()));
+  o.raw(bodyContacts_);  // the next step's measure memory
+  o.raw(restFlat_);
+  o.raw(restDir_);
+  o.raw(std::vector<CollisionStats>{stats});
+  return o.b;
+}
+
+CollisionStage::Memory CollisionStage::parseMemory(const Fabric& f, const std::string& bytes) const {
+  if (bytes.size() < 4 || std::memcmp(bytes.data(), kMagic, 4) != 0) In::fail("no WSM1 header");
+  In in{bytes, 4};
+  Memory m;
+  const Index ne = f.nElems();
+  const auto n = in.count(8 * sizeof(Real));
+  m.crossings.resize(n);
+  for (Crossing& x : m.crossings) {
+    x.a.cp = in.get<Index>(), x.a.s = in.get<Real>(), x.b.cp = in.get<Index>(), x.b.s = in.get<Real>();
+    x.normal = in.get<Vec3>(), x.measure = in.get<Real>(), x.lambda = in.get<Real>();
+    x.fsA = in.get<Real>(), x.fsB = in.get<Real>(), x.apart = in.get<Real>();
+  }
+  const auto nk = in.count(2 * sizeof(Index));
+  m.keys.resize(nk), m.memo.resize(nk);
+  for (std::size_t k = 0; k < nk; ++k) {
+    CPPair& p = m.keys[k];
+    p.a = in.get<Index>(), p.b = in.get<Index>();
+    if (p.a < 0 || p.b >= ne || !(p.a < p.b) || (k > 0 && !(m.keys[k - 1] < p))) In::fail("pairs out of range or order");
+    PairMemo& q = m.memo[k];
+    q.memo = in.get<std::uint8_t>() != 0, q.side = in.get<std::uint8_t>() != 0, q.held = in.get<std::uint8_t>() != 0;
+    q.memoPoints = in.get<std::int32_t>();
+    if (q.memoPoints < 0 || q.memoPoints > 2) In::fail("a pair with more than two remembered points");
+    for (int j = 0; j < 2; ++j) {
+      q.memoS[j] = in.get<Real>(), q.memoT[j] = in.get<Real>(), q.memoMeasure[j] = in.get<Real>();
+      q.memoNormal[j] = in.get<Vec3>();
+      if (!(std::isfinite(q.memoS[j]) && std::isfinite(q.memoT[j]) && std::isfinite(q.memoMeasure[j]) &&
+            q.memoNormal[j].allFinite()))
+        In::fail("a pair's memory not finite");
+    }
+  }
+  in.raw(m.cache);
+  if (!m.cache.empty() && m.cache.size() != nk) In::fail("carried contacts not one per pair");
+  m.cacheClock = static_cast<long>(in.get<std::int64_t>());
+  in.raw(m.sectionStamp);
+  m.heldFor = in.get<std::uint64_t>();
+  in.raw(m.held);
+  in.raw(m.restFlat);
+  in.raw(m.restDir);
+  in.raw(m.stats);
+  if (in.at != bytes.size()) In::fail("trailing bytes");
+  m.layout = in.layout;
+  for (const BodyContact& c : m.held)
+    if (c.cp < 0 || c.cp >= ne || c.body < 0 || static_cast<std::size_t>(c.body) >= m.heldFor) In::fail("a body contact out of range");
+  for (const PairCache& c : m.cache)
+    if (c.contact.cpA < 0 || c.contact.cpB >= ne) In::fail("a carried contact out of range");
+  if (!m.sectionStamp.empty() && static_cast<Index>(m.sectionStamp.size()) != ne) In::fail("section stamps not one per CP");
+  if (m.restFlat.size() != m.restDir.size() || (!m.restFlat.empty() && m.restFlat.size() != f.secFlat.size()))
+    In::fail("rest sections not one per node");
+  return m;
+}
+
+void CollisionStage::checkMemory(const Fabric& f, const std::string& bytes) const {
+  const Memory m = parseMemory(f, bytes);
+  CrossingContacts probe;
+  probe.set(f, m.crossings, params_);  // throws on a crossing out of range
+}
+
+bool CollisionStage::setMemory(const Fabric& f, const std::string& bytes) {
+  Memory m = parseMemory(f, bytes);
+  if (!m.layout) return false;
+  CrossingContacts xs;
+  xs.set(f, m.crossings, params_);
+  // Committed: the next step's full broad phase lists the pairs afresh, and the memory follows them
+  // from these keys (remapCache).
+  invalidateCache();
+  crossings_ = std::move(xs);
+  cachePairs_ = std::move(m.keys);
+  const bool gap = params_.model == ContactModel::Gap;
+  memo_ = gap ? std::move(m.memo) : std::vector<PairMemo>();
+  cache_ = std::move(m.cache);
+  cacheClock_ = m.cacheClock;
+  sectionStamp_ = std::move(m.sectionStamp);
+  bodyContacts_ = std::move(m.held), heldFor_ = m.heldFor, forgetHeld_ = false;
+  restFlat_ = std::move(m.restFlat), restDir_ = std::move(m.restDir);
+  if (!m.stats.empty()) stats = m.stats[0];
+  pairsValid_ = false, pairsChanged_ = true;
+  return true;
+}
+
+}  // namespace woven
