@@ -1,12 +1,10 @@
 """Scene scripts keep the output contract (yade -n -x, key=value, out=DIR, summary.json, exit
 status) and their figures agree with theory."""
-import json
 import math
 import os
-import subprocess
 
 import pytest
-from conftest import ROOT, run_scene
+from conftest import run_scene
 
 
 def smith_velocity(eps, E, rho):
@@ -49,16 +47,8 @@ def test_bad_key_fails_with_its_name(tmp_path, script, arg, name):
     assert rc != 0 and name in log and 'allowed' in log
 
 
-def test_yade_batch_table(tmp_path):
-    table = tmp_path / 'smith.table'
-    table.write_text('description V elements levels out\nA 150 1000 1 %s\nB 250 1000 1 %s\n'
-                     % (tmp_path / 'A', tmp_path / 'B'))
-    r = subprocess.run(['yade-batch', '--job-threads=1', str(table), os.path.join(ROOT, 'scripts', 'smith.py')],
-                       cwd=str(tmp_path), capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stdout + r.stderr
-    for tag, V in (('A', 150.0), ('B', 250.0)):
-        s = json.load(open(tmp_path / tag / 'summary.json'))
-        assert s['parameters']['V'] == V and s['status'] == 'ok'
+# yade-batch with a table: tests/python/test_doc_commands.py runs the README's
+# `yade-batch --job-threads=1 scripts/batch/smith.table scripts/smith.py` as written.
 
 
 @pytest.mark.parametrize('pattern, n, crossings', [('plain', 2, 16), ('satin', 1, 25)])
