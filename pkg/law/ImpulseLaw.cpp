@@ -42,10 +42,12 @@ void ImpulseLaw::applyRow(Fabric& f, const Row& r, const Vec3& J) {
 void ImpulseLaw::loadBodies(const std::vector<RigidBody>* bodies) {
   bodyVel_.clear();
   if (!bodies) return;
-  for (const RigidBody& b : *bodies) bodyVel_.push_back({b.vel, b.angVel, b.invMass(), b.invInertiaWorld(), b.kineticEnergy()});
+  for (const RigidBody& b : *bodies)
+    bodyVel_.push_back({b.vel, b.angVel, b.invMass(), b.invInertiaWorld(), b.kineticEnergy(), b.vel,
+                        b.dynamic() ? Vec3(0.5 * b.hostKick) : Vec3(Vec3::Zero())});
 }
 
-Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies) {
+Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies, bool afterDrift) {
   if (!bodies) return 0;
   Real work = 0;
   for (std::size_t k = 0; k < bodies->size(); ++k) {
@@ -53,6 +55,11 @@ Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies) {
     if (!b.dynamic()) continue;
     b.vel = bodyVel_[k].v, b.angVel = bodyVel_[k].w;
     work += bodyVel_[k].ke0 - b.kineticEnergy();
+    // At the synchronised velocity v -/+ hostKick/2 (before / after the drift, as energyChange's v_n
+    // and v_{n+1}) the kinetic energy changes by M (v -/+ hostKick/2).dv + M dv^2/2: the half-step
+    // change above and -/+ M hostKick/2 . dv (0 without a host kick: the same bits as before it).
+    const Vec3& h = bodyVel_[k].halfKick;
+    if (h.squaredNorm() > 0) work += (afterDrift ? -1.0 : 1.0) * b.mass * h.dot(bodyVel_[k].v - bodyVel_[k].v0);
   }
   // A kinematic body gives the fabric its impulse times its own velocity at the point (a scan of
   // every row, made only when there is one).
@@ -162,13 +169,20 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   keepVelocities(f);
 
   const bool friction = p.friction > 0 || p.bodyFriction > 0;
-  if (friction)
+  if (friction) {
+    // the row's half kick: its nodes' (forces and the body acceleration of the free ones) and, on a
+    // body row, the body's (half its host kick)
+    const Vec3 hg = 0.5 * dt * f.bodyAcceleration;
     parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
       Row& r = rows_[k];
       r.kick.setZero();
       for (int q = 0; q < 4; ++q) r.kick += (0.5 * dt * r.w[q] * f.invMass[r.node[q]]) * f.force[r.node[q]];
+      if (hg.squaredNorm() > 0)
+        for (int q = 0; q < 4; ++q) r.kick += (f.invMass[r.node[q]] > 0 ? r.w[q] : 0.0) * hg;
+      if (r.body >= 0 && bodyVel_[r.body].halfKick.squaredNorm() > 0) r.kick += bodyVel_[r.body].halfKick;
       r.frictionTaken = 0;
     });
+  }
   rep.iterations = solve(f, p, friction);
   if (friction)
     for (const Row& r : rows_) rep.frictionWork += r.frictionTaken;
@@ -191,7 +205,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   });
   rep.residual = misses.worst, rep.unresolved = misses.over;
   rep.energyChange = energyChange(f, false);
-  rep.bodyWork = storeBodies(bodies);
+  rep.bodyWork = storeBodies(bodies, false);
 }
 
 void ImpulseLaw::keepVelocities(const Fabric& f) {
@@ -202,7 +216,11 @@ void ImpulseLaw::keepVelocities(const Fabric& f) {
 // The impulses change v_{n+1/2} by dv, which is v_n + (dt/2) a_n: the kinetic energy of step n
 // changes by m (v_n . dv + dv^2 / 2). (Measured on v_{n+1/2} instead, a resting contact under load,
 // whose impulse takes back each step the velocity the kick gave, would book (m/2)(a dt)^2 of
-// dissipation every step that the motion never had.)
+// dissipation every step that the motion never had.) a_n is the node's force over its mass and the
+// body acceleration (gravity, Fabric::bodyAcceleration): with the forces' part alone a contact
+// holding a node up against gravity booked (m/2)(g dt)^2 a step (issue 33; tests/cpp/test_gravity_books).
+// Internal rows (every node free) change no momentum, so the gravity term cancels over their nodes;
+// it counts on rows against a body or a kinematic node.
 // The restitution pass comes after the drift: its dv misses x_{n+1} and first shows in step n+1's
 // kinetic energy, at v_{n+1} = v_{n+1/2} + (dt/2) a_{n+1}, taken as v_{n+1/2} + (dt/2) a_n (its
 // forces are not yet known; the difference is O(dt^2)). Measured at v_n instead, the books lost
@@ -210,13 +228,16 @@ void ImpulseLaw::keepVelocities(const Fabric& f) {
 // 0.7 dt_crit and -0.8 % at 0.35 (first order in dt).
 Real ImpulseLaw::energyChange(const Fabric& f, bool afterDrift) const {
   const Real half = (afterDrift ? 0.5 : -0.5) * dt_;
+  const Vec3 hg = half * f.bodyAcceleration;
+  const bool gravity = hg.squaredNorm() > 0;  // without: the same operations as before issue 33
   return chunkedSum(static_cast<Index>(touched_.size()), 4096, threads(), Real(0), [&](Index k0, Index k1) {
     Real dE = 0;
     for (Index k = k0; k < k1; ++k) {
       const Index i = touched_[k];
       if (f.invMass[i] == 0) continue;
       const Vec3 dv = f.vel[i] - vBefore_[k];
-      const Vec3 vn = vBefore_[k] + (half * f.invMass[i]) * f.force[i];
+      Vec3 vn = vBefore_[k] + (half * f.invMass[i]) * f.force[i];
+      if (gravity) vn += hg;
       dE += f.mass[i] * (vn.dot(dv) + 0.5 * dv.squaredNorm());
     }
     return dE;
@@ -400,7 +421,7 @@ Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p, std::vector<RigidB
   colourRows(f, static_cast<Index>(kept), p.sweepOrder, [&](Index r) -> const Row& { return sorted_[r]; });
   keepVelocities(f);
   solve(f, p, false);
-  const Real work = storeBodies(bodies);
+  const Real work = storeBodies(bodies, true);
   if (bodyWork) *bodyWork += work;
   return energyChange(f, true);
 }

@@ -120,11 +120,15 @@ class ImpulseLaw {
     Real invM;
     Mat3 invI;
     Real ke0 = 0;        // kinetic energy before the impulses [J]
+    Vec3 v0 = Vec3::Zero();        // velocity before the impulses [m/s]
+    Vec3 halfKick = Vec3::Zero();  // RigidBody::hostKick / 2 of a dynamic body [m/s]
   };
   Vec3 rowVelocity(const Fabric& f, const Row& r) const;     // relative velocity of the contact points
   void applyRow(Fabric& f, const Row& r, const Vec3& J);      // J on B, -J on A
   void loadBodies(const std::vector<RigidBody>* bodies);
-  Real storeBodies(std::vector<RigidBody>* bodies);           // writes back, returns the bodies' work
+  // writes back, returns the bodies' work (their kinetic energy at the synchronised velocity: step
+  // n's before the drift, step n+1's after it)
+  Real storeBodies(std::vector<RigidBody>* bodies, bool afterDrift);
   template <class RowAt>
   void colourRows(const Fabric& f, Index n, SweepOrder order, RowAt&& rowAt);  // rows_ by colour or block, start_ set
   void serialLayout(Index n);  // no colours: rows_[0, n) all in the serial tail, start_ set
