@@ -145,7 +145,9 @@ bp::object syncVelocities(FabricEngine& e) {
   return bytesOf(v);
 }
 void runSteps(FabricEngine& e, Real dt, long n) {
-  require(n >= 0, "steps", n, "[0, inf)");
+  // Past 2^31 a count is no count of steps (2^31 steps of the smallest fabric: hours; the fuzz's
+  // 2^31 ran on as a hang): the integer arguments' range.
+  require(n >= 0 && n <= 2147483647L, "steps", n, "[0, 2^31)");
   for (long k = 0; k < n; ++k) e.step(dt);
 }
 void saveStatePy(FabricEngine& e, const std::string& path, bool lastGood) {
