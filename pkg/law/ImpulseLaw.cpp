@@ -171,21 +171,20 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   const bool friction = p.friction > 0 || p.bodyFriction > 0;
   if (friction) {
     // the row's half kick: its nodes' (forces and the body acceleration of the free ones) and, on a
-    // body row, the body's (half its host kick)
+    // body row, the body's (half its host kick); less half the row's velocity before the solve (header)
     const Vec3 hg = 0.5 * dt * f.bodyAcceleration;
     parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
       Row& r = rows_[k];
-      r.kick.setZero();
+      r.kick = -0.5 * rowVelocity(f, r);
       for (int q = 0; q < 4; ++q) r.kick += (0.5 * dt * r.w[q] * f.invMass[r.node[q]]) * f.force[r.node[q]];
       if (hg.squaredNorm() > 0)
         for (int q = 0; q < 4; ++q) r.kick += (f.invMass[r.node[q]] > 0 ? r.w[q] : 0.0) * hg;
       if (r.body >= 0 && bodyVel_[r.body].halfKick.squaredNorm() > 0) r.kick += bodyVel_[r.body].halfKick;
-      r.frictionTaken = 0;
     });
   }
   rep.iterations = solve(f, p, friction);
-  if (friction)
-    for (const Row& r : rows_) rep.frictionWork += r.frictionTaken;
+  if (friction)  // the final tangential impulses against the mean slip (header), in row order
+    for (const Row& r : rows_) rep.frictionWork -= r.lambdaT.dot(0.5 * rowVelocity(f, r) - r.kick);
   parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
     const Row& r = rows_[k];
     const Real vn = rowVelocity(f, r).dot(r.n);
@@ -308,8 +307,6 @@ Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool fricti
     r.lambdaT = lt;
   }
   applyRow(f, r, J);
-  if (friction && mu > 0)  // the tangential part's share of this update's energy (see the header)
-    r.frictionTaken -= Jt.dot(0.5 * (vr + rowVelocity(f, r)) - r.kick);
   return miss;
 }
 
