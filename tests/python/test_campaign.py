@@ -5,11 +5,10 @@ import json
 import os
 import signal
 import subprocess
-import sys
 import time
 
 import pytest
-from conftest import ROOT
+from conftest import ROOT, run_refused
 
 # A 6.35 mm ply (8 x 8 yarns, 1 CP per crossing) struck by a 2 mm, 0.2 g cube: under a second of
 # simulation per run, the rest is YADE's start. Weibull modulus 3 scatters the yarn strengths enough
@@ -138,11 +137,9 @@ def test_unreachable_scheduler_is_refused_naming_the_key(tmp_path):
                                      ('scheduler=tcp://x:1', 'scheduler'), ('scene=V=3', 'scene'),
                                      ('level=1', 'level'), ('scene=friction=3', 'friction'),
                                      ('scene=body_friction=-0.5', 'body_friction')])
-def test_bad_keys_name_the_key(tmp_path, arg, key):
-    r = subprocess.run(['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'campaign.py'), 'out=%s' % tmp_path, arg],
-                       cwd=str(tmp_path), capture_output=True, text=True, timeout=120)
-    log = r.stdout + r.stderr
-    assert r.returncode != 0 and ('%s = ' % key) in log and 'allowed' in log, log
+def test_bad_keys_name_the_key(script_server, tmp_path, arg, key):
+    rc, log, _ = run_refused(script_server, 'campaign.py', tmp_path, arg, timeout=120)
+    assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log, log
 
 
 def test_friction_in_the_scene_is_passed_on(tmp_path):

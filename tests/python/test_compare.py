@@ -6,7 +6,7 @@ import math
 import os
 
 import pytest
-from conftest import run_scene
+from conftest import run_scene, run_refused
 
 
 @pytest.fixture(scope='module')
@@ -99,8 +99,8 @@ def test_substep_cases_meet_the_contacts_less_often(quick):
             assert r['status'] == 'ok' and r['energy_error'] < 0.01, r
 
 
-def test_bad_fine_radii_names_the_key(tmp_path):
-    rc, log, s = run_scene('compare.py', tmp_path, 'fine_radii=1,-2')
+def test_bad_fine_radii_names_the_key(script_server, tmp_path):
+    rc, log, s = run_refused(script_server, 'compare.py', tmp_path, 'fine_radii=1,-2')
     assert rc != 0 and 'fine_radii = ' in log and 'allowed' in log
 
 
@@ -111,8 +111,8 @@ def test_smith_error_of_woven_chain_is_small(quick):
     assert min(r['wave_speed_error'] for r in smith) < 0.02
 
 
-def test_bad_method_names_the_key(tmp_path):
-    rc, log, s = run_scene('compare.py', tmp_path, 'methods=impulse,magic')
+def test_bad_method_names_the_key(script_server, tmp_path):
+    rc, log, s = run_refused(script_server, 'compare.py', tmp_path, 'methods=impulse,magic')
     assert rc != 0 and 'methods = ' in log and 'allowed' in log
 
 

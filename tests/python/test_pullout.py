@@ -7,7 +7,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from conftest import ROOT, run_scene
+from conftest import ROOT, run_scene, run_refused
 
 # (pre-tension [N], friction): the corners and edges of the shipped sweep that the trends need.
 CASES = [(0, 0.0), (0, 0.3), (2, 0.3), (4, 0.0), (4, 0.15), (4, 0.3)]
@@ -100,11 +100,11 @@ def test_chart_collects_the_sweep(sweep, tmp_path):
 @pytest.mark.parametrize('arg,key', [('friction=-0.1', 'friction'), ('pretension=nan', 'pretension'),
                                      ('velocity=0', 'velocity'), ('weft_ends=glue', 'weft_ends'),
                                      ('pull=1', 'pull'), ('back_tension=-1', 'back_tension')])
-def test_bad_values_name_the_key(tmp_path, arg, key):
-    rc, log, s = run_scene('pullout.py', tmp_path, arg)
+def test_bad_values_name_the_key(script_server, tmp_path, arg, key):
+    rc, log, s = run_refused(script_server, 'pullout.py', tmp_path, arg)
     assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log, log
 
 
-def test_unknown_key_is_refused(tmp_path):
-    rc, log, s = run_scene('pullout.py', tmp_path, 'frction=0.3')
+def test_unknown_key_is_refused(script_server, tmp_path):
+    rc, log, s = run_refused(script_server, 'pullout.py', tmp_path, 'frction=0.3')
     assert rc != 0 and "unknown parameter 'frction'" in log

@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, run_refused
 
 
 def chain(n=20, L=0.02):
@@ -230,9 +230,8 @@ def test_nothing_is_attached_or_coupled_twice_and_patterns_are_exact(yade_ns):
                                                ('smith.py', ['elements=1e300'], 'elements'),
                                                ('ballistic.py', ['side=10'], 'side'),
                                                ('weave.py', ['nx=100000', 'ny=100000'], 'nx')])
-def test_oversized_scenes_are_refused_up_front(tmp_path, script, args, key):
-    from conftest import run_scene
-    rc, log, _ = run_scene(script, tmp_path, *args, timeout=120)
+def test_oversized_scenes_are_refused_up_front(script_server, tmp_path, script, args, key):
+    rc, log, _ = run_refused(script_server, script, tmp_path, *args, timeout=120)
     assert rc != 0
     last = [l for l in log.splitlines() if 'Error' in l][-1]
     assert 'ValueError: %s = ' % key in last and 'allowed' in last and 'MemoryError' not in log, last

@@ -4,7 +4,7 @@ import math
 import os
 
 import pytest
-from conftest import run_scene
+from conftest import run_refused, run_scene
 
 
 def smith_velocity(eps, E, rho):
@@ -42,9 +42,16 @@ def test_weave_script(tmp_path):
                                                ('tension.py', 'friction=3', 'friction'),
                                                ('tension.py', 'body_friction=-1', 'body_friction'),
                                                ('contact_sweep.py', 'jobs=0', 'jobs')])
-def test_bad_key_fails_with_its_name(tmp_path, script, arg, name):
-    rc, log, s = run_scene(script, tmp_path, arg)
+def test_bad_key_fails_with_its_name(script_server, tmp_path, script, arg, name):
+    rc, log, s = run_refused(script_server, script, tmp_path, arg)
     assert rc != 0 and name in log and 'allowed' in log
+
+
+def test_a_refused_key_stops_yade_with_a_non_zero_exit(tmp_path):
+    # the contract as a user meets it: yade -x exits non-zero, the log names the key (the other
+    # refusals are checked in one process: conftest.run_refused)
+    rc, log, s = run_scene('smith.py', tmp_path, 'V=-3')
+    assert rc != 0 and 'V = -3.0 is invalid' in log and 'allowed' in log and s is None
 
 
 # yade-batch with a table: tests/python/test_doc_commands.py runs the README's
