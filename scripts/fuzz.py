@@ -374,8 +374,9 @@ def worker_main(seed, scene_every, tmpdir):
             if path == 'FOLDER':
                 path = tmpdir
             elif path in ('TEXT', 'EMPTY'):
-                path = os.path.join(tmpdir, 'not_a_state.txt')
-                open(path, 'w').write('' if spec['path'] == 'EMPTY' else 'hello, this is no woven state\n' * 100)
+                p = os.path.join(tmpdir, 'not_a_state.txt')  # a scratch input of the case, as the states above
+                open(p, 'w').write('' if spec['path'] == 'EMPTY' else 'hello, this is no woven state\n' * 100)
+                path = p
             elif path == 'MISSING':
                 path = os.path.join(tmpdir, 'no', 'such.state')
             e = small_engine()

@@ -12,7 +12,8 @@ from conftest import run_scene, run_refused
 @pytest.fixture(scope='module')
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp('compare')
-    rc, log, s = run_scene('compare.py', out, 'quick=1', timeout=1500)
+    # quick=1 with the stability map at 1000 m/s only (the penalty cells the test below checks are there)
+    rc, log, s = run_scene('compare.py', out, 'quick=1', 'map_speeds=1000', timeout=1500)
     return out, rc, log, s
 
 

@@ -252,7 +252,7 @@ TABLE_RUNS = {
     'weave': ('here', []),
     'tension': ('here', []),  # README:279 too
     'ballistic': ('here', ['t_end=3e-6']),  # see README_RUNS
-    'pullout': ('test_pullout.py', 'its sweep includes the defaults (pretension=2, friction=0.3)'),
+    'pullout': ('test_pullout.py', 'its sweep includes the defaults (pretension=2, friction=0.3) with pull=1e-3'),
     'soak': ('here', ['steps=300']),
     'bench_pyrunner': ('here', ['iters=200', 'nodes=100']),
     # six 12.7 mm impacts (quick) of 2 us each instead of the 30-run matrix

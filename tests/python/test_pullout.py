@@ -11,6 +11,9 @@ from conftest import ROOT, run_scene, run_refused
 
 # (pre-tension [N], friction): the corners and edges of the shipped sweep that the trends need.
 CASES = [(0, 0.0), (0, 0.3), (2, 0.3), (4, 0.0), (4, 0.15), (4, 0.3)]
+# 1 mm of the default 3 mm pull (the one key changed; 2/3 of each run's steps): the peak force lies
+# within the first 0.5 mm in every case (docs/pullout.md), and the trends below hold over 1 mm.
+PULL = 1e-3
 
 
 @pytest.fixture(scope='module')
@@ -22,7 +25,7 @@ def sweep(tmp_path_factory):
         d = root / ('T%g-mu%g' % (T, mu))
         os.makedirs(d)
         cmd = ['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'pullout.py'), 'out=%s' % d,
-               'pretension=%g' % T, 'friction=%g' % mu]
+               'pretension=%g' % T, 'friction=%g' % mu, 'pull=%g' % PULL]
         procs.append(((T, mu), d, subprocess.Popen(cmd, cwd=str(d), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                                    text=True)))
         if len(procs) % 2 == 0:  # two cores
@@ -81,11 +84,11 @@ def test_output_contract(sweep):
     s = sweep[0][(4, 0.3)]
     d = sweep[1] / 'T4-mu0.3'
     C = np.genfromtxt(d / 'curve.csv', delimiter=',', names=True)
-    assert len(C) > 100 and C['grip_displacement_m'][-1] == pytest.approx(3e-3, rel=0.01)
+    assert len(C) > 100 and C['grip_displacement_m'][-1] == pytest.approx(PULL, rel=0.01)
     assert os.path.getsize(d / 'pullout.png') > 10000
     assert s['parameters']['friction'] == 0.3 and s['parameters']['pretension'] == 4
     assert 'coulomb_estimate_peak_force' in s['reference'] and s['units']['peak_force'] == 'N'
-    assert 0 < s['measured']['peak_displacement'] < 3e-3
+    assert 0 < s['measured']['peak_displacement'] < PULL
 
 
 def test_chart_collects_the_sweep(sweep, tmp_path):
