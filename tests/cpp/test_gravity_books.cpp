@@ -68,7 +68,7 @@ TEST(GravityBooks, FabricRestingOnABoxKeepsTheBooks) {
   e.collisions()->bodies.push_back(cube(5e-3, 0.0, Vec3(1.5e-3, 2.5e-3, -1e-4 - 3e-6 - 5e-3), Vec3::Zero()));
   const Real u0 = potential(e);
   const Real dt = 0.7 * e.criticalDt();
-  const long steps = runLength(100000, 20);
+  const long steps = runLength(100000, 50);
   long resting = 0;
   for (long s = 0; s < steps; ++s) {
     e.step(dt);
@@ -99,7 +99,7 @@ TEST(GravityBooks, BodyRestingOnAFabricKeepsTheBooks) {
   // 20 nm above the yarns' tops (round sections of 0.1 mm), over the middle two yarns
   e.collisions()->bodies.push_back(cube(0.5e-3, M, Vec3(1.5e-3, 0.6e-3, 1e-4 + 2e-8 + 0.5e-3), Vec3::Zero()));
   const Real dt = 0.7 * e.criticalDt();
-  const long steps = runLength(100000, 20);
+  const long steps = runLength(100000, 50);
   RigidBody& cube = e.collisions()->bodies[0];
   // the host's side: its velocity after the woven step (what it integrates from), the work of gravity
   Vec3 vHost = cube.vel;
