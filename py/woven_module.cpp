@@ -11,6 +11,9 @@
 #include "geom/SeparatingAxis.hpp"
 #include "shape/Cylinder.hpp"
 #include "weave/WeaveBuilder.hpp"
+#include <sys/stat.h>
+#include <cstdio>
+#include <cstring>
 #include <memory>
 
 namespace bp = boost::python;
@@ -142,7 +145,9 @@ bp::object syncVelocities(FabricEngine& e) {
   return bytesOf(v);
 }
 void runSteps(FabricEngine& e, Real dt, long n) {
-  require(n >= 0, "steps", n, "[0, inf)");
+  // Past 2^31 a count is no count of steps (2^31 steps of the smallest fabric: hours; the fuzz's
+  // 2^31 ran on as a hang): the integer arguments' range.
+  require(n >= 0 && n <= 2147483647L, "steps", n, "[0, 2^31)");
   for (long k = 0; k < n; ++k) e.step(dt);
 }
 void saveStatePy(FabricEngine& e, const std::string& path, bool lastGood) {
@@ -150,6 +155,24 @@ void saveStatePy(FabricEngine& e, const std::string& path, bool lastGood) {
   else e.saveState(path);
 }
 void loadStatePy(FabricEngine& e, const std::string& path) {
+  // StateIO reads the whole file before it checks it: an endless device (/dev/zero) or a huge file
+  // that is no state ran out of memory (a MemoryError with no message, issue 33). A state file is a
+  // regular file that starts with WOVENST: anything else is refused here, naming it, before a byte
+  // more is read. (A missing file is left to loadState, which says why it cannot be opened.)
+  struct stat st;
+  if (path.find('\0') == std::string::npos && ::stat(path.c_str(), &st) == 0) {
+    if (!S_ISREG(st.st_mode))
+      throw ParameterError("path", "'" + path + "'", std::string("a woven state file: this is ") +
+                                                         (S_ISDIR(st.st_mode) ? "a folder" : S_ISCHR(st.st_mode) ? "a character device" :
+                                                          S_ISFIFO(st.st_mode) ? "a pipe" : "not a regular file") +
+                                                         ", not a woven state");
+    char head[7] = {};
+    std::FILE* in = std::fopen(path.c_str(), "rb");
+    const std::size_t got = in ? std::fread(head, 1, sizeof(head), in) : 0;
+    if (in) std::fclose(in);
+    if (in && (got < sizeof(head) || std::memcmp(head, "WOVENST", sizeof(head)) != 0))
+      throw ParameterError("path", "'" + path + "'", "a woven state file (it does not start with WOVENST: not a woven state)");
+  }
   // Read into a temporary and checked whole (StateIO, FabricEngine::checkState), then committed.
   e.setState(loadState(path, e.fabric().nNodes()));
 }
@@ -300,7 +323,17 @@ int addBody(FabricEngine& e, long id, bp::object parts, Real mass, const Vec3& i
   for (const RigidBody& o : bodyStage(e).bodies)
     require(o.id != id, "id", id, "a YADE body not coupled yet (each body once)");
   bodyStage(e).bodies.push_back(b);
-  return static_cast<int>(bodyStage(e).bodies.size()) - 1;
+  // A body that starts inside the fabric would be pushed out by the first step's rows and projection
+  // at any cost: refused, naming it (issue 33's fuzz: add_body took one without a word; coupling's
+  // check covered only woven.coupling.couple).
+  const int k = static_cast<int>(bodyStage(e).bodies.size()) - 1;
+  const Real overlap = bodyStage(e).bodyOverlap(e.fabric(), k);
+  if (overlap > 0) {
+    bodyStage(e).bodies.pop_back();
+    throw ParameterError("body", "id " + fmt(id) + " at (" + fmt(pos.x()) + ", " + fmt(pos.y()) + ", " + fmt(pos.z()) + ") m",
+                         "a body clear of every yarn (it starts inside the fabric: overlap " + fmt(overlap) + " m)");
+  }
+  return k;
 }
 bp::dict bodyDict(FabricEngine& e, int k) {
   const RigidBody& b = bodyAt(e, k);
@@ -314,7 +347,18 @@ void setBodyState(FabricEngine& e, int k, const Vec3& pos, const Quat& ori, cons
   RigidBody c = b;
   c.pos = pos, c.ori = ori, c.vel = vel, c.angVel = angVel;
   c.validate();  // nothing changes on bad input
-  b = c;
+  // Nor a pose deeper in the fabric than where the body is now (a body in contact may move within
+  // its overlap, or out of it; one set into the yarns would be pushed out at any cost).
+  const Real before = bodyStage(e).bodyOverlap(e.fabric(), k);
+  std::swap(b, c);
+  const Real after = bodyStage(e).bodyOverlap(e.fabric(), k);
+  if (after > std::max(before, Real(0))) {
+    std::swap(b, c);
+    throw ParameterError("pos", "(" + fmt(pos.x()) + ", " + fmt(pos.y()) + ", " + fmt(pos.z()) + ") m of body " + fmt(k) +
+                                    " (id " + fmt(b.id) + ")",
+                         "a pose no deeper in the fabric than the body's present one (overlap " + fmt(std::max(before, Real(0))) +
+                             " m; this pose: " + fmt(after) + " m)");
+  }
 }
 // One step coupled with YADE: each body's state is read from O.bodies[id].state; with `rewind`
 // (NewtonIntegrator ran before this engine in the same iteration, so YADE already moved the body
@@ -378,11 +422,16 @@ bp::object semiAxesPy(FabricEngine& e) {  // a, b per node [m] with the stage's 
   return bytesOf(out);
 }
 
+// The single-pair helpers take the ranges of the scenes' inputs (README, Parameters): positions within
+// +-1e3 m, sizes up to 1e3 m, velocities up to 1e5 m/s; a step of at most 1 s (woven's are ~1e-8 s).
+// Past them (1e300) the separating-axis arithmetic overflows into inf and NaN answers (issue 33's fuzz).
 OBB makeObb(const Vec3& c, const Mat3& axes, const Vec3& e) {
-  require(c.allFinite() && axes.allFinite(), "centre/axes", 0, "finite values");
+  require(c.allFinite() && c.cwiseAbs().maxCoeff() <= 1e3, "centre", c.cwiseAbs().maxCoeff(), "coordinates within +-1e3 m");
+  require(axes.allFinite(), "axes", 0, "finite values");
   require((axes.transpose() * axes - Mat3::Identity()).cwiseAbs().maxCoeff() < 1e-9 && axes.determinant() > 0, "axes",
           axes.determinant(), "a rotation matrix (orthonormal columns A0, A1, A2, right-handed)");
-  require(e.allFinite() && e.minCoeff() >= 0, "extents", e.minCoeff(), "[0, inf) m (half-extents)");
+  require(e.allFinite() && e.minCoeff() >= 0 && e.maxCoeff() <= 1e3, "extents", e.minCoeff() < 0 ? e.minCoeff() : e.maxCoeff(),
+          "[0, 1e3] m (half-extents)");
   OBB b;
   b.centre = c, b.axes = axes, b.extent = e;
   return b;
@@ -401,8 +450,9 @@ bp::dict obbContactPy(const Vec3& ca, const Mat3& Aa, const Vec3& ea, const Vec3
 }
 bp::dict obbFirstContactPy(const Vec3& ca, const Mat3& Aa, const Vec3& ea, const Vec3& va, const Vec3& cb,
                            const Mat3& Ab, const Vec3& eb, const Vec3& vb, Real dt) {
-  require(std::isfinite(dt) && dt >= 0, "dt", dt, "[0, inf) s");
-  require(va.allFinite() && vb.allFinite(), "velocity", 0, "finite [m/s]");
+  require(std::isfinite(dt) && dt >= 0 && dt <= 1, "dt", dt, "[0, 1] s");
+  require(va.allFinite() && va.norm() <= 1e5, "velocity_a", va.norm(), "|v| <= 1e5 m/s");
+  require(vb.allFinite() && vb.norm() <= 1e5, "velocity_b", vb.norm(), "|v| <= 1e5 m/s");
   const SweptContact s = obbFirstContact(makeObb(ca, Aa, ea), va, makeObb(cb, Ab, eb), vb, dt);
   bp::dict d;
   d["hit"] = s.hit, d["time"] = s.time, d["contact"] = contactDict(s.contact);

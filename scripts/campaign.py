@@ -22,7 +22,7 @@ import woven
 import woven.campaign as campaign
 import woven.contact
 from woven.params import read_params
-from woven.output import out_dir, savefig, write_summary
+from woven.output import dry_run, out_dir, savefig, write_summary
 
 p = read_params({
     'velocities': ('60,75,85,90,95,100,110,120,150,200', 'm/s', 'impact velocities, comma-separated, each in (0, 5000]'),
@@ -97,6 +97,14 @@ def scene_value(v):
 
 # friction and body_friction refused before any run starts
 woven.contact.check_friction({k: scene_value(v) for k, v in scene.items()})
+if dry_run():
+    # A dry run checks the runs' keys too: ballistic.py's own checks on the scene keys, in this process.
+    from woven.params import dry_run_script
+    run_keys = ['%s=%s' % kv for kv in scene.items()] + ['V=%r' % velocities[0], 'seed=%d' % seeds[0],
+                                                          'weibull_m=%r' % p.weibull_m, 't_end=%r' % p.t_end]
+    verdict, why = dry_run_script(os.path.join(os.path.dirname(os.path.abspath(sys.argv[0])), 'ballistic.py'), run_keys)
+    if verdict != 'accepted':
+        bad('scene', "keys scripts/ballistic.py accepts (it said: %s)" % why)
 d = out_dir('campaign', p)
 # What every run gets besides V and seed: no VTK and no progress lines (the campaign has its own bar).
 # No pictures either (a render per run; the back-face figures are still in each summary.json).

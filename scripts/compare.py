@@ -43,6 +43,8 @@ p = read_params({
     'quick': (False, '', 'a reduced set of cases (a few minutes, for CI)'),
     'map': (True, '', 'also run the stability map'),
     'map_size': ('', '', "'quick' or 'full' stability map (default: 'quick' with quick=1, else 'full')"),
+    'map_speeds': ('', 'm/s', "the stability map's impact speeds, comma-separated, each in (0, 2000] (default: the "
+                   "map size's: quick 200,1000, full 100,300,1000)"),
     'jobs': (2, '', 'parallel runs for the stability map (timed runs always go one at a time)'),
     'V': (200.0, 'm/s', 'impact speed of the timed cases'),
     'side': (0.0, 'm', 'ply side (0: 25.4 mm, quick: 12.7 mm)'),
@@ -65,6 +67,12 @@ def bad(key, allowed):
 
 if p.map_size not in ('', 'quick', 'full'):
     bad('map_size', "'quick', 'full' or empty (follows quick)")
+try:
+    MAP_SPEEDS = [float(x) for x in str(p.map_speeds).split(',') if x.strip()]
+except ValueError:
+    MAP_SPEEDS = None
+if MAP_SPEEDS is None or not all(math.isfinite(v) and 0 < v <= 2000 for v in MAP_SPEEDS):
+    bad('map_speeds', 'comma-separated speeds in (0, 2000] m/s, or empty (the map size\'s)')
 if not (1 <= p.jobs <= 64):
     bad('jobs', '[1, 64]')
 if not (math.isfinite(p.V) and 0 < p.V <= 2000):
@@ -408,6 +416,8 @@ if p.map:
         M_DT, M_V = [0.25, 0.5, 0.9, 1.5, 3.0], [100.0, 300.0, 1000.0]
         M_K = {'penalty': [1e5, 1e6, 1e7, 1e8, 1e9], 'section_springs': [1e3, 1e4, 1e5, 1e6, 1e8],
                'yade_grid': [1e5, 1e6, 1e7, 1e8, 1e9]}
+    if MAP_SPEEDS:
+        M_V = MAP_SPEEDS
     MSCENE = {'side': 0.00635, 't_end': 8e-6, 'shape': 'sphere', 'size': 1.5e-3, 'mass': 0.05e-3,
               'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 20, 'cp_per_span': 1, 'energy_limit': 0.99,
               'overlap_limit': 100, 'pictures': 0, 'backface': 0}

@@ -32,6 +32,8 @@ p = read_params({
     'body_friction': (0.0, '', 'Coulomb coefficient between the projectile and the yarns of every run, in [0, 2]'),
     'overlap_limit': (0.1, '', 'allowed largest overlap / yarn thickness, in (0, 100]'),
     'energy_limit': (0.01, '', 'allowed energy-balance error / initial kinetic energy, in (0, 1)'),
+    # ballistic.py's own default: each run stops at perforation or arrest, or here
+    't_end': (1e-4, 's', 'simulated time at most per run, in (0, 0.01]'),
     'yade': ('yade', '', 'the YADE command the runs start'),
     'out': ('', '', 'output folder (default out/contact_sweep); the runs go to OUT/runs'),
 })
@@ -49,6 +51,8 @@ if not (math.isfinite(p.overlap_limit) and 0 < p.overlap_limit <= 100):
     bad('overlap_limit', '(0, 100] yarn thicknesses')
 if not (math.isfinite(p.energy_limit) and 0 < p.energy_limit < 1):
     bad('energy_limit', '(0, 1)')
+if not (math.isfinite(p.t_end) and 0 < p.t_end <= 0.01):
+    bad('t_end', '(0, 0.01] s')
 woven.contact.check_friction(p)
 d = out_dir('contact_sweep', p)
 STEEL = 7850.0  # kg/m^3
@@ -59,6 +63,7 @@ def scene(shape, size_mm, V, cp, side_mm):
     volume = size ** 3 if shape == 'box' else math.pi / 6 * size ** 3
     keys = {'shape': shape, 'size': size, 'mass': float('%.4g' % (STEEL * volume)), 'V': float(V),
             'cp_per_span': cp, 'side': side_mm * 1e-3, 'contact_model': p.contact_model, 'progress': 0.0,
+            't_end': p.t_end,
             'friction': p.friction, 'body_friction': p.body_friction,
             'vtk_every': -1, 'overlap_limit': 100.0, 'energy_limit': 0.99, 'pictures': 0}
     name = '%s%.1f-V%04d-cp%d-ply%.1f' % (shape, size_mm, V, cp, side_mm)

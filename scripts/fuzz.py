@@ -10,9 +10,14 @@
 # so a crash is counted, not fatal.
 # Each case ends as: a clean error (ValueError / RuntimeError / woven.InstabilityError; whether its
 # message names a mutated key is counted), an unclean error (any other exception type: TypeError,
-# ZeroDivisionError, ...), accepted (then every number the case produced, and the engine's positions,
-# velocities and energy books after a few steps, must be finite: else a silent non-finite state),
-# a crash or a hang.
+# ZeroDivisionError, MemoryError, ...), accepted (then every number the case produced, and the engine's
+# positions, velocities and energy books after a few steps, must be finite: else a silent non-finite
+# state), a crash or a hang. Cases of the classes issue 33's fuzz found accepted know they must be
+# refused (`must_refuse`): a bool for a real argument (a step size), a step outside [0, 1] s or
+# velocities past 1e5 m/s in the single-pair contact helpers (obb_first_contact), a body added, coupled
+# or moved into the fabric, a state path that is a device, a folder or another file (/dev/zero
+# read until memory ran out); accepted, they count as wrongly accepted, a failure; refused, their
+# error must name the argument (counted with the others).
 # Output: out/fuzz/summary.json (counts, the failing cases with their descriptions), cases.csv.
 import json
 import math
@@ -103,6 +108,12 @@ SCENES = {
         'mode', 'velocity', 'strain_end', 'ramp', 'safety', 'samples', 'nx', 'mcd', 'colour']),
 }
 SCENE_TEXT = ['nan', 'inf', '-1', '0', '1e300', '1e-300', 'abc', '', '1.7', '2147483648', '1e20']
+HELPER_DT = [0.1, 0.0, 1.0, 1e-9, True, False, 1e300, -1e-3, 2.0, float('nan'), float('inf')]
+
+
+def _small_real(x, limit):
+    """x is a real number (not a bool) of magnitude at most limit."""
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and abs(x) <= limit
 
 
 def case(seed, i, scene_every):
@@ -113,8 +124,35 @@ def case(seed, i, scene_every):
         base, keys = SCENES[script]
         key = rng.choice(keys)
         return 'scene', {'script': script, 'base': base, 'key': key, 'value': rng.choice(SCENE_TEXT)}
-    kind = rng.choices(['weave', 'contact', 'method', 'property', 'function', 'add_yarn', 'state'],
-                       [20, 15, 30, 6, 12, 7, 10])[0]
+    kind = rng.choices(['weave', 'contact', 'method', 'property', 'function', 'add_yarn', 'state', 'helper', 'body',
+                        'state_path'], [20, 15, 30, 6, 12, 7, 10, 6, 6, 3])[0]
+    if kind == 'helper':
+        # the single-pair helpers: a step in [0, 1] s and velocities up to 1e5 m/s, else refused
+        dt = rng.choice(HELPER_DT)
+        va = [mutate(rng, x) for x in (0.0, 0.0, 0.0)]
+        vb = [mutate(rng, x) for x in (-1.0, 0.0, 0.0)]
+        first = rng.random() < 0.7
+        extent = mutate(rng, 1.0)
+        bad_dt = first and not (isinstance(dt, float) and 0 <= dt <= 1)
+        # a velocity past 1e5 m/s (the velocities' range): refused; |v| of three components within it
+        bad_v = first and not (all(_small_real(x, 1e5) for x in va + vb) and
+                               max(math.sqrt(sum(x * x for x in v)) for v in (va, vb)) <= 1e5)
+        bad_ext = not (_small_real(extent, 1e3) and extent >= 0)
+        return kind, {'first': first, 'dt': dt, 'va': va, 'vb': vb, 'extent': extent,
+                      'must_refuse': bad_dt or bad_v or bad_ext,
+                      'mutated': ['dt', 'velocity_a', 'velocity_b', 'extents', 'centre']}
+    if kind == 'body':
+        # a body clear of the fabric (accepted) or inside it (refused, naming the body), added through
+        # add_body, woven.coupling.couple or moved there by set_body_state
+        how = rng.choice(['add_body', 'couple', 'set_body_state'])
+        inside = rng.random() < 0.5
+        shape = rng.choice(['box', 'sphere'])
+        return kind, {'how': how, 'inside': inside, 'shape': shape, 'size': rng.choice([2e-4, 1e-3, 5e-3]),
+                      'must_refuse': inside, 'mutated': ['body', 'pos']}
+    if kind == 'state_path':
+        # what load_state is pointed at: no file of woven's, never read whole
+        return kind, {'path': rng.choice(['/dev/zero', '/dev/urandom', 'FOLDER', 'TEXT', 'EMPTY', 'MISSING']),
+                      'must_refuse': True, 'mutated': ['path']}
     if kind == 'weave':
         keys = rng.sample(sorted(WEAVE_VALID), rng.randint(1, 3))
         kw = {}
@@ -138,9 +176,12 @@ def case(seed, i, scene_every):
                      (v if rng.random() < 0.5 else rng.choice(ABSURD))) for a, v in METHODS[name]]
             vecs = [[mutate(rng, rng.choice([0.0, 0.5, -2.0])) for _ in range(3)] for _ in args]
             calls.append({'name': name, 'args': args, 'vecs': vecs, 'collisions': rng.random() < 0.5})
+        # a bool where the signature takes a real number (a step size dt, a strain, a mass...): refused
+        must = any(isinstance(v, bool) and (valid == 'dt' or (isinstance(valid, float)))
+                   for c in calls for (a, v), (_, valid) in zip(c['args'], METHODS[c['name']]))
         # collisions on or off is part of the input: "collisions = off is invalid" names it
-        return kind, {'calls': calls, 'mutated': [a for c in calls for a, _ in c['args']] + [c['name'] for c in calls] +
-                      ['collisions']}
+        return kind, {'calls': calls, 'must_refuse': must,
+                      'mutated': [a for c in calls for a, _ in c['args']] + [c['name'] for c in calls] + ['collisions']}
     if kind == 'property':
         name = rng.choice(sorted(PROPERTIES))
         v = PROPERTIES[name]
@@ -172,7 +213,7 @@ def case(seed, i, scene_every):
 def worker_main(seed, scene_every, tmpdir):
     import numpy as np
     import woven
-    from yade import Vector3, Quaternion
+    from yade import Vector3, Quaternion, Matrix3
 
     def small_engine(collisions=False):
         w = woven.weave(nx=1, ny=1, cp_per_span=2)
@@ -295,6 +336,52 @@ def worker_main(seed, scene_every, tmpdir):
             e = woven.FabricEngine(f)
             note(e.dt_crit)
             finite = engine_finite(e)
+        elif kind == 'helper':
+            I = Matrix3.Identity
+            ext = vec([spec['extent']] * 3) if isinstance(spec['extent'], (int, float)) else spec['extent']
+            if spec['first']:
+                r = woven.obb_first_contact(Vector3(0, 0, 0), I, Vector3(1, 1, 1), vec(spec['va']),
+                                            Vector3(3, 0, 0), I, ext, vec(spec['vb']), spec['dt'])
+            else:
+                r = woven.obb_contact(Vector3(0, 0, 0), I, Vector3(1, 1, 1), Vector3(3, 0, 0), I, ext)
+            note({k: v for k, v in r.items() if k != 'contact'})
+        elif kind == 'body':
+            from yade import utils, O
+            e = small_engine(True)
+            X = woven.positions(e)
+            c = X[np.argmin(np.linalg.norm(X - X.mean(axis=0), axis=1))]  # a yarn node near the middle
+            top = X[:, 2].max()
+            r = spec['size']
+            # inside: centred on that node; clear: its lowest point 1 mm above the top yarn
+            z = float(c[2]) if spec['inside'] else float(top) + r + 1e-3
+            pos = Vector3(float(c[0]), float(c[1]), z)
+            part = ('box', Vector3(r, r, r), Vector3.Zero, Quaternion.Identity) if spec['shape'] == 'box' else \
+                ('sphere', r, Vector3.Zero, Quaternion.Identity)
+            if spec['how'] == 'couple':
+                O.reset()
+                b = utils.box(tuple(pos), (r, r, r)) if spec['shape'] == 'box' else utils.sphere(tuple(pos), r)
+                woven.coupling.couple(e, [O.bodies.append(b)])
+            elif spec['how'] == 'add_body':
+                e.add_body(0, [part], 1e-3, Vector3(1e-9, 1e-9, 1e-9), pos, Quaternion.Identity, Vector3.Zero, Vector3.Zero)
+            else:
+                above = Vector3(pos[0], pos[1], float(top) + r + 1e-3)
+                k = e.add_body(0, [part], 1e-3, Vector3(1e-9, 1e-9, 1e-9), above, Quaternion.Identity, Vector3.Zero,
+                               Vector3.Zero)
+                e.set_body_state(k, pos, Quaternion.Identity, Vector3.Zero, Vector3.Zero)
+            finite = engine_finite(e)
+        elif kind == 'state_path':
+            path = spec['path']
+            if path == 'FOLDER':
+                path = tmpdir
+            elif path in ('TEXT', 'EMPTY'):
+                p = os.path.join(tmpdir, 'not_a_state.txt')  # a scratch input of the case, as the states above
+                open(p, 'w').write('' if spec['path'] == 'EMPTY' else 'hello, this is no woven state\n' * 100)
+                path = p
+            elif path == 'MISSING':
+                path = os.path.join(tmpdir, 'no', 'such.state')
+            e = small_engine()
+            e.load_state(path)
+            finite = engine_finite(e)
         elif kind == 'state':
             b = bytearray(good_state())
             for op, where, byte in spec['ops']:
@@ -325,6 +412,8 @@ def worker_main(seed, scene_every, tmpdir):
             finite = run_case(kind, spec)
             finite = finite and all(math.isfinite(x) for x in numbers)
             res['outcome'] = 'accepted' if finite else 'nonfinite'
+            if spec.get('must_refuse'):
+                res['outcome'] = 'wrongly_accepted'
         except (ValueError, RuntimeError) as ex:  # woven.InstabilityError is a RuntimeError
             msg = str(ex)
             res['outcome'] = 'error'
@@ -459,7 +548,8 @@ def parent_main():
     import tempfile
     tmpdir = tempfile.mkdtemp(prefix='woven_fuzz_')
     counts = {'cases': 0, 'clean_errors': 0, 'errors_naming_key': 0, 'accepted': 0, 'unclean_errors': 0,
-              'crashes': 0, 'hangs': 0, 'silent_nonfinite': 0, 'scene_cases': 0}
+              'crashes': 0, 'hangs': 0, 'silent_nonfinite': 0, 'wrongly_accepted': 0, 'must_refuse_cases': 0,
+              'scene_cases': 0}
     failures, unnamed, rows = [], [], []
     t0 = time.time()
     w = None
@@ -478,29 +568,30 @@ def parent_main():
                 res = {'outcome': status, 'message': 'exit %s' % msg if status == 'crash' else 'no answer in %g s' % p.timeout}
                 w = None  # restarted for the next case
         counts['cases'] += 1
+        counts['must_refuse_cases'] += bool(spec.get('must_refuse'))
         o = res['outcome']
         key = {'error': 'clean_errors', 'accepted': 'accepted', 'unclean': 'unclean_errors', 'crash': 'crashes',
-               'hang': 'hangs', 'nonfinite': 'silent_nonfinite'}[o]
+               'hang': 'hangs', 'nonfinite': 'silent_nonfinite', 'wrongly_accepted': 'wrongly_accepted'}[o]
         counts[key] += 1
         if o == 'error' and res.get('names_key'):
             counts['errors_naming_key'] += 1
         elif o == 'error' and len(unnamed) < 30:
             unnamed.append({'case': i, 'spec': describe(kind, spec), 'message': res.get('message', '')})
-        if o in ('unclean', 'crash', 'hang', 'nonfinite') and len(failures) < 100:
+        if o in ('unclean', 'crash', 'hang', 'nonfinite', 'wrongly_accepted') and len(failures) < 100:
             failures.append({'case': i, 'outcome': o, 'spec': describe(kind, spec), 'message': res.get('message', '')})
         rows.append('%d,%s,%s,%d' % (i, kind, o, int(bool(res.get('names_key')))))
     if w is not None:
         w.close()
     wall = time.time() - t0
     errors = counts['clean_errors']
-    status = 'ok' if counts['crashes'] == counts['hangs'] == counts['silent_nonfinite'] == counts['unclean_errors'] == 0 else 'failed'
+    FAILS = ('crashes', 'hangs', 'silent_nonfinite', 'unclean_errors', 'wrongly_accepted')
+    status = 'ok' if all(counts[k] == 0 for k in FAILS) else 'failed'
     measured = dict(counts, errors_naming_key_fraction=counts['errors_naming_key'] / errors if errors else 1.0,
                     wall_time=wall)
     write_text_atomic(os.path.join(d, 'cases.csv'), 'case,kind,outcome,names_key\n' + '\n'.join(rows) + '\n')
-    write_summary(d, 'fuzz', p, measured, {'crashes': 0, 'hangs': 0, 'silent_nonfinite': 0, 'unclean_errors': 0},
+    write_summary(d, 'fuzz', p, measured, {k: 0 for k in FAILS},
                   {'wall_time': 's'}, status,
-                  checks={k: {'value': counts[k], 'limit': 0, 'passed': counts[k] == 0}
-                          for k in ('crashes', 'hangs', 'silent_nonfinite', 'unclean_errors')},
+                  checks={k: {'value': counts[k], 'limit': 0, 'passed': counts[k] == 0} for k in FAILS},
                   extra={'failures': failures, 'errors_not_naming_key': unnamed})
     import shutil
     if status == 'ok':

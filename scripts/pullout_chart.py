@@ -10,10 +10,12 @@ import sys
 
 import numpy as np
 from woven.params import read_params
-from woven.output import atomic_open, savefig, write_summary
+from woven.output import dry_run_stop, atomic_open, savefig, write_summary
 
 p = read_params({'runs': ('out/pullout-sweep', '', 'folder holding one sub-folder per run with its summary.json'),
                  'out': ('', '', 'output folder (default: runs)')})
+# A collector: its input is the folders it reads, which a dry run (WOVEN_DRY_RUN=1) does not need.
+dry_run_stop('pullout_chart')
 import json
 rows = []
 for f in sorted(glob.glob(os.path.join(p.runs, '*', 'summary.json'))):

@@ -11,12 +11,14 @@ import sys
 import numpy as np
 import woven
 import woven.campaign
-from woven.output import savefig
+from woven.output import dry_run_stop, savefig
 from woven.params import read_params
 from woven.output import write_summary
 
 p = read_params({'runs': ('out/v50', '', 'folder holding one sub-folder per run with its summary.json'),
                  'out': ('', '', 'output folder (default: runs)')})
+# A collector: its input is the folders it reads, which a dry run (WOVEN_DRY_RUN=1) does not need.
+dry_run_stop('v50')
 files = sorted(glob.glob(os.path.join(p.runs, '*', 'summary.json')))
 if not files:
     raise ValueError('runs = %r is invalid: allowed a folder whose sub-folders hold summary.json files of '

@@ -16,7 +16,7 @@ import sys
 
 import woven
 import woven.cunniff as cunniff
-from woven.output import csv_field as fmt, out_dir, savefig, write_csv, write_summary
+from woven.output import dry_run_stop, csv_field as fmt, out_dir, savefig, write_csv, write_summary
 from woven.params import read_params
 from woven.weave import WEAVE_KEYS
 
@@ -27,6 +27,8 @@ p = read_params({
                  "campaign's scene but for those keys (empty: none)"),
     'out': ('', '', 'output folder (default out/v50_plies)'),
 })
+# A collector: its input is the folders it reads, which a dry run (WOVEN_DRY_RUN=1) does not need.
+dry_run_stop('v50_plies')
 
 # Keys that may differ between campaigns of one family (V and seed are the runs' own; out is the folder).
 RUN_KEYS = ('V', 'seed', 'out')

@@ -118,6 +118,7 @@ void ChainDynamics::setSlowElements(std::vector<std::uint8_t> slow, int m) {
 void ChainDynamics::setBodyAcceleration(const Vec3& g) {
   require(g.allFinite() && g.norm() <= 1e6, "gravity", g.norm(), "finite, |g| <= 1e6 m/s^2");
   loads_.bodyAcceleration = g;
+  f_.bodyAcceleration = g;  // the impulse law's energy books read it there
 }
 
 Vec3 ChainDynamics::acceleration(Index i) const {

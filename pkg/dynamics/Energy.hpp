@@ -17,8 +17,8 @@ struct EnergyBooks {
   Real bodyWork = 0;    ///< of which by the rigid bodies (YADE bodies coupled to the fabric) [J]
   Real contact = 0;     ///< energy taken out by the contact stage since the start [J] (impulses take, corrections give)
   /// Of the impulses' take, what their tangential (Coulomb friction) parts took since the start [J]:
-  /// each Gauss-Seidel update's tangential impulse times the row's mean relative velocity over the
-  /// update (law/ImpulseLaw.hpp); `contact` holds the rest (the normal parts).
+  /// each row's final tangential impulse of a solve against its mean relative velocity over the solve
+  /// (law/ImpulseLaw.hpp); `contact` holds the rest (the normal parts).
   Real friction = 0;
   Real contactInput = 0;  ///< energy the contact stage put in, summed step by step [J] (>= 0)
   /// Energy held now in the contact springs of a force-based response (penalty contacts 1/2 k_p delta^2,

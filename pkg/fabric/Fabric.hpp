@@ -49,6 +49,11 @@ struct Fabric {
   std::vector<Yarn> yarns;
   std::vector<YarnMaterial> materials;
 
+  /// Acceleration every free node has besides force/mass [m/s^2] (gravity): ChainDynamics's body
+  /// acceleration (setBodyAcceleration sets both), here for the collision stage's energy books, which
+  /// count an impulse at the synchronised velocity v_n = v_{n+1/2} - dt/2 (force/mass + this).
+  Vec3 bodyAcceleration = Vec3::Zero();
+
   Index nNodes() const { return static_cast<Index>(pos.size()); }
   Index nElems() const { return static_cast<Index>(elem0.size()); }
   Index nYarns() const { return static_cast<Index>(yarns.size()); }

@@ -43,10 +43,12 @@ void ImpulseLaw::applyRow(Fabric& f, const Row& r, const Vec3& J) {
 void ImpulseLaw::loadBodies(const std::vector<RigidBody>* bodies) {
   bodyVel_.clear();
   if (!bodies) return;
-  for (const RigidBody& b : *bodies) bodyVel_.push_back({b.vel, b.angVel, b.invMass(), b.invInertiaWorld(), b.kineticEnergy()});
+  for (const RigidBody& b : *bodies)
+    bodyVel_.push_back({b.vel, b.angVel, b.invMass(), b.invInertiaWorld(), b.kineticEnergy(), b.vel,
+                        b.dynamic() ? Vec3(0.5 * b.hostKick) : Vec3(Vec3::Zero())});
 }
 
-Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies) {
+Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies, bool afterDrift) {
   if (!bodies) return 0;
   Real work = 0;
   for (std::size_t k = 0; k < bodies->size(); ++k) {
@@ -54,6 +56,11 @@ Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies) {
     if (!b.dynamic()) continue;
     b.vel = bodyVel_[k].v, b.angVel = bodyVel_[k].w;
     work += bodyVel_[k].ke0 - b.kineticEnergy();
+    // At the synchronised velocity v -/+ hostKick/2 (before / after the drift, as energyChange's v_n
+    // and v_{n+1}) the kinetic energy changes by M (v -/+ hostKick/2).dv + M dv^2/2: the half-step
+    // change above and -/+ M hostKick/2 . dv (0 without a host kick: the same bits as before it).
+    const Vec3& h = bodyVel_[k].halfKick;
+    if (h.squaredNorm() > 0) work += (afterDrift ? -1.0 : 1.0) * b.mass * h.dot(bodyVel_[k].v - bodyVel_[k].v0);
   }
   // A kinematic body gives the fabric its impulse times its own velocity at the point (a scan of
   // every row, made only when there is one).
@@ -108,7 +115,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
     r.target = -allowed;
     // A persistent crossing's row starts from its last impulse (the warm start; applied below).
     r.lambda = contacts[c].warm > 0 ? contacts[c].warm : 0.0, r.lambdaT.setZero(), r.body = -1, r.arm.setZero();
-    r.kick.setZero(), r.frictionTaken = 0, r.contact = c;
+    r.kick.setZero(), r.contact = c;
     hasRow_[c] = 1;
   });
   yarnRows_.clear();
@@ -117,7 +124,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   bodyRows_.clear();
   for (const BodyContact& c : bodyContacts) {
     Row r;
-    r.lambda = 0, r.lambdaT.setZero(), r.kick.setZero(), r.frictionTaken = 0, r.contact = -1;
+    r.lambda = 0, r.lambdaT.setZero(), r.kick.setZero(), r.contact = -1;
     r.node[0] = f.elem0[c.cp], r.node[1] = r.node[0] + 1, r.n = 2;
     r.w[0] = -(1 - c.s), r.w[1] = -c.s;
     r.normal = c.normal;
@@ -167,24 +174,31 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   for (Index i : touched_) marked_[i] = 0;
   dt_ = dt;
   keepVelocities(f);
-  // Warm start (Catto; Box2D): the rows of persistent crossings apply their last step's impulse
-  // before the sweeps, which then correct it (lambda >= 0 accumulated as from 0). In row order, one
-  // thread: a node's sum of impulses in a fixed order.
-  for (const Row& r : rows_)
-    if (r.lambda > 0) applyRow(f, r, r.lambda * r.normal);
 
   const bool friction = p.friction > 0 || p.bodyFriction > 0;
-  if (friction)
+  if (friction) {
+    // the row's half kick: its nodes' (forces and the body acceleration of the free ones) and, on a
+    // body row, the body's (half its host kick); less half the row's velocity before the solve (header)
+    const Vec3 hg = 0.5 * dt * f.bodyAcceleration;
     parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
       Row& r = rows_[k];
-      r.kick.setZero();
+      r.kick = -0.5 * rowVelocity(f, r);
       for (int q = 0; q < r.n; ++q) r.kick += (0.5 * dt * r.w[q] * f.invMass[r.node[q]]) * f.force[r.node[q]];
-      r.frictionTaken = 0;
+      if (hg.squaredNorm() > 0)
+        for (int q = 0; q < r.n; ++q) r.kick += (f.invMass[r.node[q]] > 0 ? r.w[q] : 0.0) * hg;
+      if (r.body >= 0 && bodyVel_[r.body].halfKick.squaredNorm() > 0) r.kick += bodyVel_[r.body].halfKick;
     });
+  }
+  // Warm start (Catto; Box2D): the rows of persistent crossings apply their last step's impulse
+  // before the sweeps, which then correct it (lambda >= 0 accumulated as from 0). In row order, one
+  // thread: a node's sum of impulses in a fixed order. After the friction's kick, which reads the
+  // velocities before the solve.
+  for (const Row& r : rows_)
+    if (r.lambda > 0) applyRow(f, r, r.lambda * r.normal);
   rep.iterations = solve(f, p, friction);
   rep.skipped = skipped_;
-  if (friction)
-    for (const Row& r : rows_) rep.frictionWork += r.frictionTaken;
+  if (friction)  // the final tangential impulses against the mean slip (header), in row order
+    for (const Row& r : rows_) rep.frictionWork -= r.lambdaT.dot(0.5 * rowVelocity(f, r) - r.kick);
   parallelFor(static_cast<Index>(rows_.size()), kRowGrain, threads(), [&](Index k) {
     const Row& r = rows_[k];
     const Real vn = rowVelocity(f, r).dot(r.normal);
@@ -207,7 +221,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   });
   rep.residual = misses.worst, rep.unresolved = misses.over, rep.unresolvedBand = misses.overBand;
   rep.energyChange = energyChange(f, false);
-  rep.bodyWork = storeBodies(bodies);
+  rep.bodyWork = storeBodies(bodies, false);
 }
 
 void ImpulseLaw::contactImpulses(std::size_t contacts, std::vector<Real>& out) const {
@@ -224,7 +238,11 @@ void ImpulseLaw::keepVelocities(const Fabric& f) {
 // The impulses change v_{n+1/2} by dv, which is v_n + (dt/2) a_n: the kinetic energy of step n
 // changes by m (v_n . dv + dv^2 / 2). (Measured on v_{n+1/2} instead, a resting contact under load,
 // whose impulse takes back each step the velocity the kick gave, would book (m/2)(a dt)^2 of
-// dissipation every step that the motion never had.)
+// dissipation every step that the motion never had.) a_n is the node's force over its mass and the
+// body acceleration (gravity, Fabric::bodyAcceleration): with the forces' part alone a contact
+// holding a node up against gravity booked (m/2)(g dt)^2 a step (issue 33; tests/cpp/test_gravity_books).
+// Internal rows (every node free) change no momentum, so the gravity term cancels over their nodes;
+// it counts on rows against a body or a kinematic node.
 // The restitution pass comes after the drift: its dv misses x_{n+1} and first shows in step n+1's
 // kinetic energy, at v_{n+1} = v_{n+1/2} + (dt/2) a_{n+1}, taken as v_{n+1/2} + (dt/2) a_n (its
 // forces are not yet known; the difference is O(dt^2)). Measured at v_n instead, the books lost
@@ -232,13 +250,16 @@ void ImpulseLaw::keepVelocities(const Fabric& f) {
 // 0.7 dt_crit and -0.8 % at 0.35 (first order in dt).
 Real ImpulseLaw::energyChange(const Fabric& f, bool afterDrift) const {
   const Real half = (afterDrift ? 0.5 : -0.5) * dt_;
+  const Vec3 hg = half * f.bodyAcceleration;
+  const bool gravity = hg.squaredNorm() > 0;  // without: the same operations as before issue 33
   return chunkedSum(static_cast<Index>(touched_.size()), 4096, threads(), Real(0), [&](Index k0, Index k1) {
     Real dE = 0;
     for (Index k = k0; k < k1; ++k) {
       const Index i = touched_[k];
       if (f.invMass[i] == 0) continue;
       const Vec3 dv = f.vel[i] - vBefore_[k];
-      const Vec3 vn = vBefore_[k] + (half * f.invMass[i]) * f.force[i];
+      Vec3 vn = vBefore_[k] + (half * f.invMass[i]) * f.force[i];
+      if (gravity) vn += hg;
       dE += f.mass[i] * (vn.dot(dv) + 0.5 * dv.squaredNorm());
     }
     return dE;
@@ -309,8 +330,6 @@ Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool fricti
     r.lambdaT = lt;
   }
   applyRow(f, r, J);
-  if (friction && mu > 0)  // the tangential part's share of this update's energy (see the header)
-    r.frictionTaken -= Jt.dot(0.5 * (vr + rowVelocity(f, r)) - r.kick);
   return miss;
 }
 
@@ -483,7 +502,7 @@ Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p, std::vector<RigidB
   colourRows(f, static_cast<Index>(kept), p.sweepOrder, [&](Index r) -> const Row& { return sorted_[r]; });
   keepVelocities(f);
   solve(f, p, false);
-  const Real work = storeBodies(bodies);
+  const Real work = storeBodies(bodies, true);
   if (bodyWork) *bodyWork += work;
   return energyChange(f, true);
 }

@@ -39,6 +39,15 @@ struct RigidBody {
   Quat ori = Quat::Identity();
   Vec3 vel = Vec3::Zero();       ///< [m/s]
   Vec3 angVel = Vec3::Zero();    ///< [rad/s], global frame
+  /// The velocity the host's integrator added over its last step [m/s]: YADE's NewtonIntegrator kicks
+  /// the body by O.dt (gravity + forces) / m between two woven steps, so this is the velocity
+  /// setHostState reads less the one woven left the body with. The energy books count the body's
+  /// kinetic energy at its synchronised velocity vel - hostKick/2, as they count the nodes' at
+  /// v_{n+1/2} - dt/2 a_n (law/ImpulseLaw): at the half-step velocity, a body resting on the fabric under
+  /// gravity did (M/2)(g dt)^2 of work a step that it never did (issue 33). Not state: taken every
+  /// step (0 when the host leaves the velocity alone, as without gravity; a velocity set by hand in
+  /// the host between two steps counts as that step's kick).
+  Vec3 hostKick = Vec3::Zero();
 
   bool dynamic() const { return mass > 0 && std::isfinite(mass); }
   Real invMass() const { return dynamic() ? 1 / mass : 0.0; }
@@ -87,6 +96,7 @@ struct RigidBody {
       const Real angle = w.norm() * dt;
       if (angle > 0) q = (Quat(Eigen::AngleAxis<Real>(-angle, w.normalized())) * q).normalized();
     }
+    hostKick = v - vel;
     pos = p, ori = q, vel = v, angVel = w;
   }
   /// Throws ParameterError naming the field ("mass", "inertia", "parts", ...) and its range.

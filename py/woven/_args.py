@@ -116,8 +116,29 @@ def _wrap_method(cls_name, name, raw):
     method = sig[0][1] == 'arg1'  # bound (or a constructor): the first argument is self
     asig = sig[1:] if method else sig
 
+    fname = '%s.%s' % (cls_name, name) if cls_name else name
+    # Boost.Python takes True for a real number (1.0): a bool given for a step size (dt) or any other
+    # real argument ran with 1 (issue 33's fuzz). Refused, naming the argument: a check of the few
+    # real arguments by identity, before the call.
+    # The same for a vector given as a list with a bool in it (YADE's converter reads True as 1.0).
+    reals = [(k, n, t) for k, (t, n, _) in enumerate(asig) if t in ('float', 'Vector3')]
+    skip = 1 if method else 0
+
+    def refuse_bools(args, kw):
+        for k, n, t in reals:
+            v = args[skip + k] if skip + k < len(args) else kw.get(n)
+            if t == 'float':
+                if v is True or v is False:
+                    raise ValueError('%s = %r is invalid: allowed a real number (SI units), not a bool (argument of %s)'
+                                     % (n, v, fname))
+            elif type(v) in (list, tuple) and any(x is True or x is False for x in v):
+                raise ValueError('%s = %s is invalid: allowed a Vector3 of 3 real numbers (SI units), not bools (argument '
+                                 'of %s)' % (n, _short(v), fname))
+
     @functools.wraps(raw)
     def call(*args, **kw):
+        if reals:
+            refuse_bools(args, kw)
         try:
             return raw(*args, **kw)
         except Exception as e:
@@ -125,12 +146,19 @@ def _wrap_method(cls_name, name, raw):
                 raise
             owner = args[0] if method and args else None
             rest = args[1:] if method else args
-            raise ValueError(_diagnose('%s.%s' % (cls_name, name) if cls_name else name, asig, rest, kw, owner, e)) from None
+            raise ValueError(_diagnose(fname, asig, rest, kw, owner, e)) from None
     return call
 
 
 def _wrap_setter(name, prop):
     def fset(self, value):
+        if value is True or value is False:  # a bool for a real-valued property (a time, a factor): refused
+            try:
+                current = prop.fget(self) if prop.fget else None
+            except Exception:
+                current = None
+            if isinstance(current, float):
+                raise ValueError('%s = %r is invalid: allowed %s, not a bool' % (name, value, _allowed('float', name, None)))
         try:
             prop.fset(self, value)
         except Exception as e:
@@ -177,7 +205,8 @@ def finite(name, value, lo=-math.inf, hi=math.inf, unit='', integer=False):
     rng = '[%g, %g]%s' % (lo, hi, (' ' + unit) if unit else '')
     kind = 'an integer' if integer else 'a finite number'
     try:
-        if isinstance(value, (bytes, bytearray)):
+        # a bool is no real quantity (True read as 1 s, 1 m...): refused unless a count was asked for
+        if isinstance(value, (bytes, bytearray)) or (isinstance(value, bool) and not integer):
             raise TypeError
         v = float(value)
     except (TypeError, ValueError, OverflowError):

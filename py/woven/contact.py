@@ -92,7 +92,8 @@ def _convert(key, value):
             raise ValueError('%s = %r is invalid: allowed %s' % (key, value, allowed))
         return value
     try:
-        if isinstance(value, (str, bytes)) or value is None:
+        # a bool for a real-valued key (True read as 1) is refused; integer keys take 0/1 as counts
+        if isinstance(value, (str, bytes)) or value is None or (isinstance(value, bool) and isinstance(default, float)):
             raise TypeError
         f = float(value)
     except (TypeError, ValueError, OverflowError):

@@ -73,11 +73,7 @@ def couple(engine, ids, parts=None):
         mass = s.mass if b.dynamic else 0.0
         if b.dynamic and not (s.mass > 0 and math.isfinite(s.mass)):
             raise ValueError('mass = %r of body %d is invalid: allowed (0, inf) kg for a dynamic body' % (s.mass, i))
-        k = engine.add_body(i, parts[i] if parts and i in parts else _parts_of(b), mass, s.inertia, s.pos, s.ori, s.vel, s.angVel)
-        overlap = engine.body_overlap(k)
-        if overlap > 0:
-            engine.pop_body()
-            raise ValueError('body %d starts inside the fabric (overlap %.3g m): allowed a start clear of every '
-                             'yarn' % (i, overlap))
-        out.append(k)
+        # add_body refuses a body that starts inside the fabric, naming it
+        out.append(engine.add_body(i, parts[i] if parts and i in parts else _parts_of(b), mass, s.inertia, s.pos, s.ori,
+                                   s.vel, s.angVel))
     return out

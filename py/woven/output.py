@@ -84,8 +84,35 @@ def savefig(fig, path, **kw):
         fig.savefig(tmp, **kw)
 
 
+class DryRun(SystemExit):
+    """Raised by dry_run_stop under WOVEN_DRY_RUN=1: a SystemExit with status 0, so `yade -x` exits
+    cleanly, and a class of its own, so a driver running scripts in one process can tell "the keys
+    were accepted" from a script's own sys.exit."""
+
+    def __init__(self, name):
+        SystemExit.__init__(self, 0)
+        self.scene = name
+
+
+def dry_run():
+    """True under WOVEN_DRY_RUN=1 (or any value but '', '0'): a scene reads and checks its keys and
+    stops before it builds, runs or writes anything (docs: a command checked without running it)."""
+    return os.environ.get('WOVEN_DRY_RUN', '') not in ('', '0')
+
+
+def dry_run_stop(name):
+    """Under WOVEN_DRY_RUN, says that `name`'s keys were accepted and stops the script (exit 0)."""
+    if dry_run():
+        print('%s: dry run (WOVEN_DRY_RUN=1): the keys are accepted; nothing was run' % name)
+        sys.stdout.flush()
+        raise DryRun(name)
+
+
 def out_dir(name, params):
     """out/NAME under the working directory, or the folder given by params['out'] if not empty.
+
+    Every scene calls it once its keys have passed their checks and before it builds anything: under
+    WOVEN_DRY_RUN=1 the script stops here (dry_run_stop), having made no folder.
 
     Under yade-batch (YADE_BATCH set) a run whose folder already holds a complete summary.json of
     this scene made with the same keys is not done again: the script stops here with the recorded
@@ -93,6 +120,7 @@ def out_dir(name, params):
     running the same yade-batch command again. WOVEN_RESUME=0 in the environment runs it anyway.
     Outside yade-batch a scene always runs (a run killed mid-way and started again overwrites its
     folder's files, each of them atomically)."""
+    dry_run_stop(name)
     d = params.get('out') or os.path.join('out', name)
     os.makedirs(d, exist_ok=True)
     if os.environ.get('YADE_BATCH') and os.environ.get('WOVEN_RESUME', '1') != '0':

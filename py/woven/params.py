@@ -83,3 +83,49 @@ def read_params(defaults, argv=None):
             raise ValueError('unknown parameter %r: allowed keys are %s' % (k, ', '.join(sorted(defaults))))
         p[k] = _convert(k, v, defaults[k][0]) if isinstance(v, str) else v
     return p
+
+
+def dry_run_script(path, argv=(), batch=None, dry=True):
+    """Runs the scene script `path` with `argv` (['key=value', ...]) in this process under
+    WOVEN_DRY_RUN=1: the script reads and checks its keys and stops where it would start building
+    (woven.output.dry_run_stop). `batch`: 'TABLE:LINE' of a yade-batch table, as YADE_BATCH gives it.
+    Returns ('accepted', '') or ('refused', message), the message of the error the script raised
+    (or 'exit N' for a script that exited before its dry-run point). Needs YADE's namespace (run
+    it under `yade -x`, or with yade imported): the scripts use O, Vector3, PyRunner as YADE gives them.
+    One process checks many commands at the cost of one YADE start (tests/python/test_doc_commands.py).
+    dry=False runs the script for real (a command expected to be refused, wherever the script
+    refuses it): then ('completed', '') when it ran to its end, ('exit N', '') for sys.exit(N)."""
+    import runpy
+    from .output import DryRun
+    main = sys.modules.get('__main__')
+    names = vars(main) if main is not None and 'O' in vars(main) else None
+    if names is None:
+        import yade
+        names = vars(yade)
+    init = {k: v for k, v in names.items() if not k.startswith('_')}
+    saved_argv, saved_env = sys.argv, {k: os.environ.get(k) for k in ('WOVEN_DRY_RUN', 'YADE_BATCH')}
+    sys.argv = [path] + list(argv)
+    if dry:
+        os.environ['WOVEN_DRY_RUN'] = '1'
+    else:
+        os.environ.pop('WOVEN_DRY_RUN', None)
+    if batch:
+        os.environ['YADE_BATCH'] = batch
+    else:
+        os.environ.pop('YADE_BATCH', None)
+    try:
+        runpy.run_path(path, init_globals=init, run_name='__main__')
+        return ('refused', 'the script ran to its end without reaching its dry-run point') if dry else ('completed', '')
+    except DryRun:
+        return 'accepted', ''
+    except SystemExit as e:
+        return ('refused', 'exit %s' % (e.code,)) if dry else ('exit %s' % (e.code,), '')
+    except Exception as e:  # noqa: BLE001 - the script's own refusal, reported
+        return 'refused', '%s: %s' % (type(e).__name__, e)
+    finally:
+        sys.argv = saved_argv
+        for k, v in saved_env.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v

@@ -89,6 +89,12 @@ Outcome tension(int threads, int steps) {
   return o;
 }
 
+// The struck ply's runs in Debug and sanitizer builds (chain_util's runLength): a tenth of them, 30
+// steps. The cube breaks its first yarns within 10 steps and every stage's loops run in each step: the
+// sanitizers check the code paths, which the first steps take; the Release run keeps the 300 steps
+// for the bits (issue 33: these runs were 60 % of the sanitizer tier's time).
+constexpr long kSlowSteps = 10;
+
 // A 40 x 40-yarn ply (one CP per crossing, ~3200 CPs, every yarn end clamped, grid broad phase) and
 // a 3 mm, 1 g cube touching its middle at 1000 m/s; breakage at 1 % raw strain; friction between
 // yarns and with the cube.
@@ -153,14 +159,14 @@ void expectEveryRowOnceInRowOrder(const Layout& layout, int lastGroup, Index nRo
 }  // namespace
 
 TEST(Threads, TensionSceneIsTheSameBitsOnOneTwoAndThreeThreads) {
-  const int steps = static_cast<int>(runLength(200, 4));
+  const int steps = static_cast<int>(runLength(200, 8));
   const Outcome one = tension(1, steps);
   EXPECT_GT(one.contacts, 500);  // one per crossing (576) and the neighbours alongside: several chunks
   for (int t : {2, 3}) expectSame(one, tension(t, steps), t);
 }
 
 TEST(Threads, BallisticSceneWithBreakageIsTheSameBitsOnOneTwoAndThreeThreads) {
-  const int steps = static_cast<int>(runLength(300, 3));
+  const int steps = static_cast<int>(runLength(300, kSlowSteps));
   const Outcome one = ballistic(1, steps);
   EXPECT_GT(one.broken, 0) << "the cube breaks yarns within the run";
   EXPECT_GT(one.bodyVel.z(), -1000) << "the ply slows the cube";
@@ -168,7 +174,7 @@ TEST(Threads, BallisticSceneWithBreakageIsTheSameBitsOnOneTwoAndThreeThreads) {
 }
 
 TEST(Threads, BlockedSweepsGiveTheSameBitsOnOneTwoAndThreeThreads) {
-  const int steps = static_cast<int>(runLength(300, 3));
+  const int steps = static_cast<int>(runLength(300, kSlowSteps));
   const Outcome one = ballistic(1, steps, BroadPhase::Grid, 1e-5, SweepOrder::Blocked);
   EXPECT_GT(one.broken, 0) << "the cube breaks yarns within the run";
   EXPECT_GT(one.bodyVel.z(), -1000) << "the ply slows the cube";
@@ -181,7 +187,7 @@ TEST(Threads, BlockedSweepsGiveTheSameBitsOnOneTwoAndThreeThreads) {
 // struck ply, breaks included: a pair the partial lists missed would show here. (That a listed pair
 // no longer measured forgets its memory is tested in test_collisions.cpp: this run does not reach it.)
 TEST(Threads, BallisticSceneIsTheSameBitsForAnySkinAndBroadPhase) {
-  const int steps = static_cast<int>(runLength(300, 3));
+  const int steps = static_cast<int>(runLength(300, kSlowSteps));
   const Outcome one = ballistic(1, steps);
   EXPECT_GT(one.broken, 0) << "the cube breaks yarns within the run";
   expectSame(one, ballistic(1, steps, BroadPhase::Grid, 4e-5), 1);
@@ -196,7 +202,7 @@ TEST(Threads, BallisticSceneIsTheSameBitsForAnySkinAndBroadPhase) {
 // for each lower colour, an earlier row of that colour at one of its nodes), and large enough that
 // the same-bits test above splits colours over the threads.
 TEST(Threads, RowsOfAColourShareNoNodeOnAStruckPly) {
-  const Outcome o = ballistic(1, static_cast<int>(runLength(300, 3)));
+  const Outcome o = ballistic(1, static_cast<int>(runLength(300, kSlowSteps)));
   const std::vector<CPContact>& cs = o.contactList;
   const Index nRows = static_cast<Index>(cs.size() + o.bodyContactList.size());
   const Index nNodes = static_cast<Index>(o.pos.size());
@@ -292,7 +298,7 @@ TEST(Threads, ContactThreadsForceTheStageCountOnly) {
 // in row order, the body rows in the tail, no node in the rows of two groups of one phase (what lets
 // a phase's groups run at once), every block a fair share of the rows and the serial seam small.
 TEST(Threads, RowsOfTwoBlocksShareNoNodeOnAStruckPly) {
-  const Outcome o = ballistic(1, static_cast<int>(runLength(300, 3)), BroadPhase::Grid, 1e-5, SweepOrder::Blocked);
+  const Outcome o = ballistic(1, static_cast<int>(runLength(300, kSlowSteps)), BroadPhase::Grid, 1e-5, SweepOrder::Blocked);
   const std::vector<CPContact>& cs = o.contactList;
   const Index nYarn = static_cast<Index>(cs.size()), nRows = nYarn + static_cast<Index>(o.bodyContactList.size());
   ASSERT_GT(o.bodyContactList.size(), 0u) << "the cube touches the ply";

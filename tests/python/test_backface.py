@@ -3,8 +3,6 @@
 (woven.render), and the friction and back-face keys of scripts/ballistic.py refused out of range."""
 import math
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -13,6 +11,7 @@ import woven
 import woven.backface as bfd
 import woven.render
 import woven.theory as theory
+from conftest import run_refused
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -139,11 +138,9 @@ def test_picture_is_written_and_shows_strain_and_broken_ends(tmp_path):
                                       ('body_friction=0.2 model=yade', 'body_friction'),
                                       ('backface_w=0', 'backface_w'), ('backface_strain=0.5', 'backface_strain'),
                                       ('pictures=-1', 'pictures'), ('front_tolerance=0', 'front_tolerance')])
-def test_ballistic_refuses_bad_friction_and_backface_keys(tmp_path, arg, key):
-    r = subprocess.run(['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'ballistic.py'), 'out=%s' % tmp_path]
-                       + arg.split(), capture_output=True, text=True, timeout=120, cwd=str(tmp_path))
-    assert r.returncode != 0
-    err = r.stdout + r.stderr
+def test_ballistic_refuses_bad_friction_and_backface_keys(script_server, tmp_path, arg, key):
+    rc, err, _ = run_refused(script_server, 'ballistic.py', tmp_path, *arg.split())
+    assert rc != 0
     assert key in err and ('[0, 2]' in err or '(0,' in err or '[0, 100]' in err)
     assert not os.path.exists(os.path.join(str(tmp_path), 'summary.json'))  # refused before anything ran
 

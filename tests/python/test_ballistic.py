@@ -6,7 +6,7 @@ import os
 
 import numpy as np
 import pytest
-from conftest import run_scene
+from conftest import run_scene, run_refused
 
 
 def test_small_impact_balances_energy_and_writes_vtk(tmp_path):
@@ -54,8 +54,8 @@ def test_no_perforation_is_reported_clearly(tmp_path):
                                       (['clamp=3'], 'clamp'), (['energy_guard=0.01'], 'energy_guard'),
                                       (['energy_guard=-1'], 'energy_guard'), (['guard_safety=0.8'], 'guard_safety'),
                                       (['backface_strain=-1e-4'], 'backface_strain')])
-def test_bad_input_names_the_key(tmp_path, args, key):
-    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', *args)
+def test_bad_input_names_the_key(script_server, tmp_path, args, key):
+    rc, log, s = run_refused(script_server, 'ballistic.py', tmp_path, 'side=0.004', *args)
     assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log
 
 
@@ -186,20 +186,20 @@ def test_fine_radius_from_the_transverse_wave(tmp_path):
 @pytest.mark.parametrize('args,key', [(['fine_radius=nan'], 'fine_radius'),
                                       (['fine_radius=1e-3', 'cp_coarse=0'], 'cp_coarse'),
                                       (['fine_radius=1e-3', 'cp_per_span=2', 'cp_coarse=3'], 'cp_coarse')])
-def test_bad_adaptive_keys_name_the_key(tmp_path, args, key):
-    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', *args)
+def test_bad_adaptive_keys_name_the_key(script_server, tmp_path, args, key):
+    rc, log, s = run_refused(script_server, 'ballistic.py', tmp_path, 'side=0.004', *args)
     assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log
 
 
 @pytest.mark.parametrize('args', [['substeps=0'], ['substeps=65'], ['substeps=2', 'response=penalty'],
                                   ['substeps=2', 'flattening=springs'], ['substeps=2', 'contact_model=paper']])
-def test_bad_substeps_name_the_key(tmp_path, args):
-    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', *args)
+def test_bad_substeps_name_the_key(script_server, tmp_path, args):
+    rc, log, s = run_refused(script_server, 'ballistic.py', tmp_path, 'side=0.004', *args)
     assert rc != 0 and 'substeps = ' in log and 'allowed' in log
 
 
-def test_bad_multirate_names_the_key(tmp_path):
-    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', 'multirate=2')
+def test_bad_multirate_names_the_key(script_server, tmp_path):
+    rc, log, s = run_refused(script_server, 'ballistic.py', tmp_path, 'side=0.004', 'multirate=2')
     assert rc != 0 and 'multirate = ' in log and 'allowed' in log
 
 
@@ -253,8 +253,8 @@ def test_bench_adaptive_quick(tmp_path):
     assert set(s['checks']) == {'speedup', 'residual_velocity', 'perforated'}
 
 
-def test_bench_adaptive_bad_window_names_the_key(tmp_path):
-    rc, log, s = run_scene('bench_adaptive.py', tmp_path, 'quick=1', 'window=both')
+def test_bench_adaptive_bad_window_names_the_key(script_server, tmp_path):
+    rc, log, s = run_refused(script_server, 'bench_adaptive.py', tmp_path, 'quick=1', 'window=both')
     assert rc != 0 and 'window = ' in log and 'allowed' in log
 
 
@@ -268,8 +268,8 @@ def test_bench_adaptive_passes_the_projectile_to_both_runs(tmp_path):
 
 
 @pytest.mark.parametrize('arg,key', [('shape=cone', 'shape'), ('size=0.5', 'size'), ('mass=0', 'mass')])
-def test_bench_adaptive_bad_projectile_names_the_key(tmp_path, arg, key):
-    rc, log, s = run_scene('bench_adaptive.py', tmp_path, 'quick=1', arg)
+def test_bench_adaptive_bad_projectile_names_the_key(script_server, tmp_path, arg, key):
+    rc, log, s = run_refused(script_server, 'bench_adaptive.py', tmp_path, 'quick=1', arg)
     assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log
 
 
@@ -316,6 +316,6 @@ def test_the_check_takes_out_what_the_flattening_left(tmp_path):
     assert o_off['yarn_max_rel'] > 2.2e-6 / thickness
 
 
-def test_bad_projection_check_names_the_key(tmp_path):
-    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', 'projection_check=0.01')
+def test_bad_projection_check_names_the_key(script_server, tmp_path):
+    rc, log, s = run_refused(script_server, 'ballistic.py', tmp_path, 'side=0.004', 'projection_check=0.01')
     assert rc != 0 and 'projection_check = ' in log and 'allowed' in log

@@ -3,7 +3,7 @@ import json
 import math
 import os
 
-from conftest import run_scene
+from conftest import run_scene, run_refused
 
 
 def test_bench_scaling_two_sizes_and_its_fit(tmp_path):
@@ -24,7 +24,7 @@ def test_bench_scaling_two_sizes_and_its_fit(tmp_path):
     assert open(os.path.join(str(tmp_path), 'scaling.csv')).readline().startswith('scene,cps,')
 
 
-def test_bench_scaling_refuses_bad_keys(tmp_path):
+def test_bench_scaling_refuses_bad_keys(script_server, tmp_path):
     for arg, text in (('cps=50', 'cps = '), ('scenes=drop', 'scenes = '), ('steps=0', 'steps = 0 is invalid')):
-        rc, out, _ = run_scene('bench_scaling.py', tmp_path, arg, timeout=120)
+        rc, out, _ = run_refused(script_server, 'bench_scaling.py', tmp_path, arg, timeout=120)
         assert rc != 0 and text in out and 'allowed' in out, out

@@ -1,23 +1,24 @@
-"""V50 campaigns (scripts/campaign.py, woven.campaign): 40 impacts of a tiny scene on the local backend,
-killed halfway and resumed without redoing finished runs; the same 40 on a 2-worker Dask LocalCluster,
+"""V50 campaigns (scripts/campaign.py, woven.campaign): 16 impacts of a tiny scene on the local backend,
+killed halfway and resumed without redoing finished runs; the same 16 on a 2-worker Dask LocalCluster,
 bit for bit; an unreachable scheduler refused naming the key; bad keys refused; the bootstrap interval."""
 import json
 import os
 import signal
 import subprocess
-import sys
 import time
 
 import pytest
-from conftest import ROOT
+from conftest import ROOT, run_refused
 
 # A 6.35 mm ply (8 x 8 yarns, 1 CP per crossing) struck by a 2 mm, 0.2 g cube: under a second of
 # simulation per run, the rest is YADE's start. Weibull modulus 3 scatters the yarn strengths enough
 # that the seeds change the residual velocity (38-56 m/s at 80 m/s, measured) and V50 (~60 m/s).
 SCENE = 'side=0.00635 size=2e-3 mass=0.2e-3 samples=10 clear_steps=20 energy_limit=0.05'
-KEYS = ['velocities=40,50,55,60,65,70,80,100', 'seeds=1,2,3,4,5', 'weibull_m=3', 't_end=6e-5',
+# 8 velocities x 2 seeds: 16 runs (40 with 5 seeds until issue 33 shrank CI; the fit, the kill and
+# resume, and the Dask comparison need both outcomes and more runs than a kill catches at once).
+KEYS = ['velocities=40,50,55,60,65,70,80,100', 'seeds=1,2', 'weibull_m=3', 't_end=6e-5',
         'scene=%s' % SCENE, 'boot=100']
-N_RUNS = 40
+N_RUNS = 16
 TIMING = ('wall_seconds', 'cpu_seconds', 'cp_steps_per_second', 'phase_seconds', 'mirror_seconds', 'pictures_seconds')
 
 
@@ -49,7 +50,7 @@ def local_campaign(tmp_path_factory):
                             stderr=subprocess.STDOUT, start_new_session=True)
     t0 = time.time()
     while time.time() - t0 < 300:
-        if os.path.isdir(out / 'runs') and len(summaries(out)) >= 8:
+        if os.path.isdir(out / 'runs') and len(summaries(out)) >= 5:
             break
         if proc.poll() is not None:
             break
@@ -75,7 +76,7 @@ def local_campaign(tmp_path_factory):
 def test_killed_campaign_resumes_without_redoing_finished_runs(local_campaign):
     out, before, final, rc, log = local_campaign
     assert rc == 0, log
-    assert len(before) >= 8  # the kill came after at least 8 runs had finished
+    assert len(before) >= 5  # the kill came after at least 5 runs had finished
     m = final['measured']
     assert m['runs'] == N_RUNS and m['complete'] == N_RUNS and not m['incomplete']
     # nothing finished was redone: the resumed campaign skipped exactly those and ran the rest
@@ -138,11 +139,9 @@ def test_unreachable_scheduler_is_refused_naming_the_key(tmp_path):
                                      ('scheduler=tcp://x:1', 'scheduler'), ('scene=V=3', 'scene'),
                                      ('level=1', 'level'), ('scene=friction=3', 'friction'),
                                      ('scene=body_friction=-0.5', 'body_friction')])
-def test_bad_keys_name_the_key(tmp_path, arg, key):
-    r = subprocess.run(['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'campaign.py'), 'out=%s' % tmp_path, arg],
-                       cwd=str(tmp_path), capture_output=True, text=True, timeout=120)
-    log = r.stdout + r.stderr
-    assert r.returncode != 0 and ('%s = ' % key) in log and 'allowed' in log, log
+def test_bad_keys_name_the_key(script_server, tmp_path, arg, key):
+    rc, log, _ = run_refused(script_server, 'campaign.py', tmp_path, arg, timeout=120)
+    assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log, log
 
 
 def test_friction_in_the_scene_is_passed_on(tmp_path):
@@ -195,7 +194,7 @@ def test_scheduler_address_of_a_running_cluster(local_campaign, tmp_path):
     cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None)
     try:
         keys = [k for k in KEYS if not k.startswith(('velocities=', 'seeds='))]
-        keys += ['velocities=65,70', 'seeds=4', 'fit=0']  # 2 runs: too few for a fit
+        keys += ['velocities=65,70', 'seeds=2', 'fit=0']  # 2 runs: too few for a fit
         r = subprocess.run(['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'campaign.py'), 'out=%s' % tmp_path,
                             'backend=dask', 'scheduler=%s' % cluster.scheduler_address] + keys,
                            cwd=str(tmp_path), capture_output=True, text=True, timeout=300)
@@ -205,7 +204,7 @@ def test_scheduler_address_of_a_running_cluster(local_campaign, tmp_path):
     s = json.load(open(tmp_path / 'summary.json'))
     assert s['measured']['workers'] == 1 and s['measured']['run_now'] == 2
     a, b = summaries(local_campaign[0]), summaries(tmp_path)
-    for name in ('V0065.0-s4', 'V0070.0-s4'):
+    for name in ('V0065.0-s2', 'V0070.0-s2'):
         assert b[name]['measured']['residual_velocity'] == a[name]['measured']['residual_velocity']
 
 

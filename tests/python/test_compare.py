@@ -6,13 +6,19 @@ import math
 import os
 
 import pytest
-from conftest import run_scene
+from conftest import run_scene, run_refused
+
+
+FINE_RADII = [1]
 
 
 @pytest.fixture(scope='module')
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp('compare')
-    rc, log, s = run_scene('compare.py', out, 'quick=1', timeout=1500)
+    # quick=1 with the stability map at 1000 m/s only (the penalty cells the test below checks are there)
+    # and the adaptive cases at one fine radius (the default is two): 55 YADE processes instead of 80
+    rc, log, s = run_scene('compare.py', out, 'quick=1', 'map_speeds=1000', 'fine_radii=%s' % ','.join(map(str, FINE_RADII)),
+                           timeout=1500)
     return out, rc, log, s
 
 
@@ -70,8 +76,8 @@ def test_adaptive_cases_coarsen_away_from_the_impact(quick):
     uniform = {(r['cp_per_span'], r['dt_over_dt_crit']): r for r in rows if r['method'] == 'impulse' and not r['reference']}
     coarse = [r for r in rows if r['method'] == 'impulse' and r['cp_per_span'] == 1][0]
     adaptive = [r for r in rows if r['method'] == 'impulse_adaptive']
-    # fine_radius = 1 and 2 projectile sizes (3 mm sphere), at 2 and 4 CPs per span only
-    assert sorted({r['fine_radius'] for r in adaptive}) == pytest.approx([3e-3, 6e-3])
+    # fine_radius = the fine radii asked (in projectile sizes: a 3 mm sphere), at 2 and 4 CPs per span only
+    assert sorted({r['fine_radius'] for r in adaptive}) == pytest.approx([3e-3 * x for x in FINE_RADII])
     assert {r['cp_per_span'] for r in adaptive} == {2, 4}
     for r in [r for r in adaptive if r['substeps'] == 1]:
         # fewer CPs than the uniform case of its resolution, more than the coarse ply (a fine patch)
@@ -99,8 +105,8 @@ def test_substep_cases_meet_the_contacts_less_often(quick):
             assert r['status'] == 'ok' and r['energy_error'] < 0.01, r
 
 
-def test_bad_fine_radii_names_the_key(tmp_path):
-    rc, log, s = run_scene('compare.py', tmp_path, 'fine_radii=1,-2')
+def test_bad_fine_radii_names_the_key(script_server, tmp_path):
+    rc, log, s = run_refused(script_server, 'compare.py', tmp_path, 'fine_radii=1,-2')
     assert rc != 0 and 'fine_radii = ' in log and 'allowed' in log
 
 
@@ -111,8 +117,8 @@ def test_smith_error_of_woven_chain_is_small(quick):
     assert min(r['wave_speed_error'] for r in smith) < 0.02
 
 
-def test_bad_method_names_the_key(tmp_path):
-    rc, log, s = run_scene('compare.py', tmp_path, 'methods=impulse,magic')
+def test_bad_method_names_the_key(script_server, tmp_path):
+    rc, log, s = run_refused(script_server, 'compare.py', tmp_path, 'methods=impulse,magic')
     assert rc != 0 and 'methods = ' in log and 'allowed' in log
 
 

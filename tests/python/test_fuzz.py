@@ -1,7 +1,10 @@
 """The fuzz test's quick subset (scripts/fuzz.py): 200 generated cases of the public Python API (and
 four scene runs with a mutated key), each in a worker process that is restarted after a crash. No
 case may crash, hang or leave a non-finite state without an error; the errors must be ValueError /
-RuntimeError naming what was wrong (the full run, 2000 cases, is in docs and the issue report)."""
+RuntimeError naming what was wrong (the full run, 2000 cases, is in docs and the issue report).
+The classes issue 33's outside fuzz found accepted (a bool for a step size, absurd steps in the
+single-pair contact helpers, a body inside the fabric, /dev/zero as a state) are among the cases,
+each knowing it must be refused: none may be accepted."""
 import json
 import os
 import subprocess
@@ -21,6 +24,8 @@ def test_quick_fuzz_has_no_crash_hang_or_silent_nonfinite_state(tmp_path):
     assert m['hangs'] == 0, detail
     assert m['silent_nonfinite'] == 0, detail
     assert m['unclean_errors'] == 0, detail
+    assert m['wrongly_accepted'] == 0, detail
+    assert m['must_refuse_cases'] >= 10
     # the cases do probe: most are refused, cleanly, and nearly all refusals name the argument
     assert m['clean_errors'] > 100 and m['accepted'] > 10
     assert m['errors_naming_key'] >= 0.9 * m['clean_errors']

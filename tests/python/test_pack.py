@@ -4,7 +4,7 @@ cylinder's mass and inertia against the closed form, the RCC and FSP in a short 
 import math
 
 import pytest
-from conftest import run_scene
+from conftest import run_scene, run_refused
 
 
 @pytest.mark.parametrize('args,key', [
@@ -18,8 +18,8 @@ from conftest import run_scene
     (['plies=2', 'standoff=-1e-3'], 'standoff'),  # a projectile that starts inside the pack
     (['model=yade', 'plies=2'], 'model'), (['model=yade', 'shape=rcc'], 'model'),
 ])
-def test_bad_pack_and_projectile_keys_name_the_key(tmp_path, args, key):
-    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', 'progress=0', *args, timeout=120)
+def test_bad_pack_and_projectile_keys_name_the_key(script_server, tmp_path, args, key):
+    rc, log, s = run_refused(script_server, 'ballistic.py', tmp_path, 'side=0.004', 'progress=0', *args, timeout=120)
     assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log, log[-2000:]
 
 

@@ -7,10 +7,13 @@ import subprocess
 
 import numpy as np
 import pytest
-from conftest import ROOT, run_scene
+from conftest import ROOT, run_scene, run_refused
 
 # (pre-tension [N], friction): the corners and edges of the shipped sweep that the trends need.
 CASES = [(0, 0.0), (0, 0.3), (2, 0.3), (4, 0.0), (4, 0.15), (4, 0.3)]
+# 1 mm of the default 3 mm pull (the one key changed; 2/3 of each run's steps): the peak force lies
+# within the first 0.5 mm in every case (docs/pullout.md), and the trends below hold over 1 mm.
+PULL = 1e-3
 
 
 @pytest.fixture(scope='module')
@@ -22,7 +25,7 @@ def sweep(tmp_path_factory):
         d = root / ('T%g-mu%g' % (T, mu))
         os.makedirs(d)
         cmd = ['yade', '-n', '-x', os.path.join(ROOT, 'scripts', 'pullout.py'), 'out=%s' % d,
-               'pretension=%g' % T, 'friction=%g' % mu]
+               'pretension=%g' % T, 'friction=%g' % mu, 'pull=%g' % PULL]
         procs.append(((T, mu), d, subprocess.Popen(cmd, cwd=str(d), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                                    text=True)))
         if len(procs) % 2 == 0:  # two cores
@@ -70,6 +73,10 @@ def test_energy_books_of_the_pull_close(sweep):
             assert E['friction'] > 0, case
         if case[1] == 0:
             assert E['friction'] == 0, case
+        # the normal impulses take energy (issue 33: split update by update, at 4 N and friction 0.15
+        # their book ended at -0.50 mJ, friction's at 1.02 mJ; split by the final impulses, 0.08 and 0.44)
+        if case[0] > 0:
+            assert E['dissipated_contacts'] > 0, (case, E)
         assert s['checks']['energy_balance']['passed'] and s['status'] == 'ok'
 
 
@@ -77,11 +84,11 @@ def test_output_contract(sweep):
     s = sweep[0][(4, 0.3)]
     d = sweep[1] / 'T4-mu0.3'
     C = np.genfromtxt(d / 'curve.csv', delimiter=',', names=True)
-    assert len(C) > 100 and C['grip_displacement_m'][-1] == pytest.approx(3e-3, rel=0.01)
+    assert len(C) > 100 and C['grip_displacement_m'][-1] == pytest.approx(PULL, rel=0.01)
     assert os.path.getsize(d / 'pullout.png') > 10000
     assert s['parameters']['friction'] == 0.3 and s['parameters']['pretension'] == 4
     assert 'coulomb_estimate_peak_force' in s['reference'] and s['units']['peak_force'] == 'N'
-    assert 0 < s['measured']['peak_displacement'] < 3e-3
+    assert 0 < s['measured']['peak_displacement'] < PULL
 
 
 def test_chart_collects_the_sweep(sweep, tmp_path):
@@ -96,11 +103,11 @@ def test_chart_collects_the_sweep(sweep, tmp_path):
 @pytest.mark.parametrize('arg,key', [('friction=-0.1', 'friction'), ('pretension=nan', 'pretension'),
                                      ('velocity=0', 'velocity'), ('weft_ends=glue', 'weft_ends'),
                                      ('pull=1', 'pull'), ('back_tension=-1', 'back_tension')])
-def test_bad_values_name_the_key(tmp_path, arg, key):
-    rc, log, s = run_scene('pullout.py', tmp_path, arg)
+def test_bad_values_name_the_key(script_server, tmp_path, arg, key):
+    rc, log, s = run_refused(script_server, 'pullout.py', tmp_path, arg)
     assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log, log
 
 
-def test_unknown_key_is_refused(tmp_path):
-    rc, log, s = run_scene('pullout.py', tmp_path, 'frction=0.3')
+def test_unknown_key_is_refused(script_server, tmp_path):
+    rc, log, s = run_refused(script_server, 'pullout.py', tmp_path, 'frction=0.3')
     assert rc != 0 and "unknown parameter 'frction'" in log

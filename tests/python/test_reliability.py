@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, run_refused
 
 
 def chain(n=20, L=0.02):
@@ -230,9 +230,87 @@ def test_nothing_is_attached_or_coupled_twice_and_patterns_are_exact(yade_ns):
                                                ('smith.py', ['elements=1e300'], 'elements'),
                                                ('ballistic.py', ['side=10'], 'side'),
                                                ('weave.py', ['nx=100000', 'ny=100000'], 'nx')])
-def test_oversized_scenes_are_refused_up_front(tmp_path, script, args, key):
-    from conftest import run_scene
-    rc, log, _ = run_scene(script, tmp_path, *args, timeout=120)
+def test_oversized_scenes_are_refused_up_front(script_server, tmp_path, script, args, key):
+    rc, log, _ = run_refused(script_server, script, tmp_path, *args, timeout=120)
     assert rc != 0
     last = [l for l in log.splitlines() if 'Error' in l][-1]
     assert 'ValueError: %s = ' % key in last and 'allowed' in last and 'MemoryError' not in log, last
+
+
+# --- issue 33: what an outside fuzz found accepted ---
+def test_a_bool_is_no_step_size(yade_ns):
+    import woven
+    from yade import Vector3, Matrix3
+    e = chain()
+    I = Matrix3.Identity
+    # True read as 1 s: refused naming the argument, for methods, functions, setters and keys alike
+    for call, name in [(lambda: e.step(True), 'dt'), (lambda: e.run(dt=False, steps=2), 'dt'),
+                       (lambda: woven.obb_first_contact(Vector3(0, 0, 0), I, Vector3(1, 1, 1), Vector3(0, 0, 0),
+                                                        Vector3(3, 0, 0), I, Vector3(1, 1, 1), Vector3(-1, 0, 0), True), 'dt'),
+                       (lambda: setattr(e, 'velocity_ramp', True), 'velocity_ramp'),
+                       (lambda: e.set_vel(1, [True, 0.0, 0.0]), 'velocity'),
+                       (lambda: woven.contact.penalty_dt_limit(1e-6, True), 'k')]:
+        with pytest.raises(ValueError, match=r'%s = .*(True|False).* is invalid' % name):
+            call()
+    assert e.iter == 0 and e.velocity_ramp == 0
+    e.step(0.5 * e.dt_crit)  # a real number still works
+    assert e.iter == 1
+
+
+def test_single_pair_helpers_refuse_absurd_steps_and_sizes(yade_ns):
+    import woven
+    from yade import Vector3, Matrix3
+    I = Matrix3.Identity
+    a, b = Vector3(0, 0, 0), Vector3(3, 0, 0)
+    one = Vector3(1, 1, 1)
+    for dt in (1e300, 2.0, -1e-9, float('inf')):
+        with pytest.raises(ValueError, match=r'dt = .* is invalid: allowed \[0, 1\] s'):
+            woven.obb_first_contact(a, I, one, Vector3(0, 0, 0), b, I, one, Vector3(-1, 0, 0), dt)
+    with pytest.raises(ValueError, match=r'velocity_b = .* is invalid: allowed \|v\| <= 1e5 m/s'):
+        woven.obb_first_contact(a, I, one, Vector3(0, 0, 0), b, I, one, Vector3(-2e5, 0, 0), 1e-6)
+    with pytest.raises(ValueError, match=r'centre = .* is invalid: allowed coordinates within \+-1e3 m'):
+        woven.obb_contact(Vector3(1e300, 0, 0), I, one, b, I, one)
+    with pytest.raises(ValueError, match=r'extents = .* is invalid: allowed \[0, 1e3\] m'):
+        woven.obb_contact(a, I, Vector3(1e300, 1, 1), b, I, one)
+    # the largest step allowed: 1 s at 1 m/s closes the 1 m gap at 1 s, exactly
+    s = woven.obb_first_contact(a, I, one, Vector3(0, 0, 0), b, I, one, Vector3(-1, 0, 0), 1.0)
+    assert s['hit'] and s['time'] == pytest.approx(1.0, abs=1e-12)
+
+
+def test_a_body_inside_the_fabric_is_refused_naming_it(yade_ns):
+    import numpy as np
+    import woven
+    from yade import Vector3, Quaternion
+    w = woven.weave(nx=2, ny=2, cp_per_span=2)
+    e = w.engine
+    woven.contact.enable(e)
+    e.settle_sections()
+    X = woven.positions(e)
+    c = X[np.argmin(np.linalg.norm(X - X.mean(axis=0), axis=1))]
+    box = [('box', Vector3(5e-4, 5e-4, 5e-4), Vector3.Zero, Quaternion.Identity)]
+    args = (1e-3, Vector3(1e-9, 1e-9, 1e-9))
+    inside = Vector3(*map(float, c))
+    with pytest.raises(ValueError, match=r'body = id 7 at .* is invalid: allowed a body clear of every yarn \(it starts '
+                                         r'inside the fabric: overlap [0-9.e-]+ m\)'):
+        e.add_body(7, box, *args, inside, Quaternion.Identity, Vector3.Zero, Vector3.Zero)
+    assert e.n_bodies == 0  # nothing added
+    above = Vector3(inside[0], inside[1], float(X[:, 2].max()) + 1.5e-3)
+    k = e.add_body(7, box, *args, above, Quaternion.Identity, Vector3.Zero, Vector3.Zero)
+    with pytest.raises(ValueError, match=r'pos = .* of body 0 \(id 7\) is invalid: allowed a pose no deeper'):
+        e.set_body_state(k, inside, Quaternion.Identity, Vector3.Zero, Vector3.Zero)
+    assert e.body(k)['pos'] == above  # unchanged
+    e.set_body_state(k, above + Vector3(0, 0, 1e-3), Quaternion.Identity, Vector3.Zero, Vector3.Zero)  # away: fine
+
+
+@pytest.mark.parametrize('which', ['/dev/zero', '/dev/urandom', 'folder', 'text', 'empty'])
+def test_a_state_path_that_is_no_state_is_refused_naming_it(tmp_path, which):
+    e = chain()
+    path = {'folder': str(tmp_path), 'text': str(tmp_path / 'notes.txt'), 'empty': str(tmp_path / 'empty.state')}.get(which, which)
+    if which == 'text':
+        open(path, 'w').write('not a state\n' * 1000)
+    elif which == 'empty':
+        open(path, 'w').close()
+    # /dev/zero was read until memory ran out: MemoryError with no message
+    with pytest.raises(ValueError, match=r"path = '%s' is invalid: allowed .*not a woven state" % path):
+        e.load_state(path)
+    assert e.iter == 0

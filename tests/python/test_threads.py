@@ -3,7 +3,7 @@ and the thread benchmark's runs on 1 and 2 threads end in the same bits."""
 import os
 import subprocess
 
-from conftest import ROOT
+from conftest import ROOT, run_refused
 
 
 def test_yade_j_sets_woven_threads_in_the_loop(tmp_path):
@@ -35,7 +35,7 @@ def test_bench_threads_same_bits(tmp_path):
     assert s['measured']['sweep_order'] == 'sequential'
 
 
-def test_bench_ballistic_same_bits_on_two_threads(tmp_path):
+def test_bench_ballistic_same_bits_on_two_threads(script_server, tmp_path):
     # The struck ply (impulse rows on the projectile, blocked sweeps, position projection) on 1 and 2
     # threads in one process, twice each: the same bits in all four runs; a thread count, repeat count
     # or sweep order out of range is refused, naming the key.
@@ -52,12 +52,7 @@ def test_bench_ballistic_same_bits_on_two_threads(tmp_path):
     assert len(s['measured']['speedup_each']) == 2 and len(s['measured']['wall_seconds_n_threads_each']) == 2
     assert s['measured']['wall_seconds_n_threads'] == min(s['measured']['wall_seconds_n_threads_each'])
     assert len(s['measured']['ideal_loop_speedup_each']) == 2
-    bad = subprocess.run(['yade', '-n', '-x', script, 'out=%s' % tmp_path, 'threads=0'], cwd=str(tmp_path),
-                         capture_output=True, text=True, timeout=120)
-    assert bad.returncode != 0 and 'threads = 0 is invalid' in bad.stdout + bad.stderr
-    bad = subprocess.run(['yade', '-n', '-x', script, 'out=%s' % tmp_path, 'repeats=11'], cwd=str(tmp_path),
-                         capture_output=True, text=True, timeout=120)
-    assert bad.returncode != 0 and 'repeats = 11 is invalid' in bad.stdout + bad.stderr
-    bad = subprocess.run(['yade', '-n', '-x', script, 'out=%s' % tmp_path, 'sweep_order=red-black'], cwd=str(tmp_path),
-                         capture_output=True, text=True, timeout=120)
-    assert bad.returncode != 0 and "sweep_order = 'red-black' is invalid" in bad.stdout + bad.stderr
+    for arg, text in (('threads=0', 'threads = 0 is invalid'), ('repeats=11', 'repeats = 11 is invalid'),
+                      ('sweep_order=red-black', "sweep_order = 'red-black' is invalid")):
+        rc, log, _ = run_refused(script_server, script, tmp_path, arg, timeout=120)
+        assert rc != 0 and text in log, log

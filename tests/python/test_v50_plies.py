@@ -8,7 +8,7 @@ import os
 import subprocess
 
 import pytest
-from conftest import ROOT
+from conftest import ROOT, run_refused
 
 from woven import cunniff
 
@@ -98,13 +98,13 @@ def test_table_arithmetic(campaigns):
     assert os.path.getsize(out / 'chart' / 'v50_plies.png') > 10000
 
 
-def test_refusals(campaigns):
+def test_refusals(script_server, campaigns):
     out = campaigns
-    rc, log = yade('v50_plies.py', 'campaigns=%s' % (out / 'nowhere'), 'out=%s' % (out / 'bad1'), cwd=out)
+    rc, log, _ = run_refused(script_server, 'v50_plies.py', out / 'bad1', 'campaigns=%s' % (out / 'nowhere'))
     assert rc != 0 and 'campaigns' in log and 'nowhere' in log
     # The 2-ply campaign is not the 1-ply scene at another friction: refused naming plies.
-    rc, log = yade('v50_plies.py', 'campaigns=%s' % (out / 'p1'), 'friction=%s' % (out / 'p2'),
-                   'out=%s' % (out / 'bad2'), cwd=out)
+    rc, log, _ = run_refused(script_server, 'v50_plies.py', out / 'bad2', 'campaigns=%s' % (out / 'p1'),
+                             'friction=%s' % (out / 'p2'))
     assert rc != 0 and 'friction' in log and 'plies' in log
-    rc, log = yade('v50_plies.py', 'campaigns=%s,%s' % (out / 'p1', out / 'p1'), 'out=%s' % (out / 'bad3'), cwd=out)
+    rc, log, _ = run_refused(script_server, 'v50_plies.py', out / 'bad3', 'campaigns=%s,%s' % (out / 'p1', out / 'p1'))
     assert rc != 0 and 'one campaign per ply count' in log

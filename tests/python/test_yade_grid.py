@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import run_scene
+from conftest import run_scene, run_refused
 
 
 @pytest.fixture
@@ -122,8 +122,8 @@ def test_projectile_momentum_is_conserved(grid):
 
 
 @pytest.mark.parametrize('script', ['ballistic.py', 'tension.py', 'smith.py'])
-def test_bad_model_names_the_key(tmp_path, script):
-    rc, log, s = run_scene(script, tmp_path, 'model=abaqus')
+def test_bad_model_names_the_key(script_server, tmp_path, script):
+    rc, log, s = run_refused(script_server, script, tmp_path, 'model=abaqus')
     assert rc != 0 and 'model' in log and 'allowed' in log and s is None
 
 
