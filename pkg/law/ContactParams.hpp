@@ -100,7 +100,8 @@ struct ContactParams {
   /// the drift of the step by more than this (a miss of solverTolerance / dt, and never less than
   /// `tolerance`); rows over it are the unresolved ones. 1 nm: 0.2 % of the projection's slop, so
   /// what a row misses takes hundreds of steps to reach what the projection takes out. 0: the
-  /// tolerance alone (1e-6 m/s, 7e-14 m a step at the default ballistic step).
+  /// tolerance alone (1e-6 m/s, 7e-14 m a step at the default ballistic step). The gap model only
+  /// (its targets take a miss back at the next step); the paper model's solve stops at `tolerance`.
   Real solverTolerance = 1e-9;
   int maxIterations = 50;     ///< bound on the impulse iterations per step, >= 1
   int flattenPasses = 4;      ///< re-tests of flattened contacts per step (paper's "go to steps 1 and 2"), >= 1

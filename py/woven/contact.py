@@ -17,7 +17,8 @@ CONTACT_KEYS = {
     'margin': (1e-6, 'm', 'added to each side of a CP box: contacts start this close'),
     'tolerance': (1e-6, 'm/s', 'Eq. 4 resting band (and the impulse solve\'s least tolerance)'),
     'solver_tolerance': (1e-9, 'm', 'the impulse sweeps stop once no row errs the step\'s drift by more than this, in [0, 1e-3] '
-                         '(0: tolerance alone); the rows over it are the unresolved ones'),
+                         '(0: tolerance alone; contact_model=gap only, the paper model stops at tolerance); the rows '
+                         'over it are the unresolved ones'),
     'max_iterations': (50, '', 'impulse sweeps per step at most'),
     'flatten_passes': (4, '', 'flattening re-tests per step'),
     'position_correction': (0.2, '', 'contact_model=paper: fraction of a locked overlap removed per step before the drift, in [0, 1]'),
