@@ -231,6 +231,7 @@ bp::dict collisionStats(FabricEngine& e) {
   d["unresolved_band"] = s.impulses.unresolvedBand, d["skipped_updates"] = s.impulses.skipped;
   d["renewed"] = s.renewed;
   d["max_unresolved"] = s.maxUnresolved, d["max_residual"] = s.maxResidual;
+  d["total_rows"] = s.totalRows, d["total_sweeps"] = s.totalSweeps, d["total_unresolved"] = s.totalUnresolved;
   d["correction_energy"] = s.correctionEnergy;
   d["mean_penetration"] = s.meanPenetration, d["overlapping"] = s.overlapping;
   d["deepest_pair"] = bp::make_tuple(s.deepestA, s.deepestB);

@@ -136,6 +136,7 @@ for _ in range(p.repeats):
     if p.threads > 1:
         runsN.append(coupled(p.threads))
 ply, proj, wall, phases, state, cpu = min(runs1, key=lambda r: r[2])
+solve = ply.engine.collision_stats()
 steps = int(round(p.t_end / O.dt))
 rate = ply.engine.n_elements * steps / wall
 per_100us = wall * 1e-4 / (steps * O.dt)
@@ -146,6 +147,11 @@ measured = {'cps': ply.engine.n_elements, 'steps': steps, 'dt': O.dt, 'simulated
             'chain_only_cp_steps_per_second': chain_rate, 'coupled_over_chain': rate / chain_rate,
             'chain_only_seconds_each': chain_runs,
             'projectile_velocity_end': -proj.state.vel[2], 'broken_elements': ply.engine.broken_elements,
+            # the impulse solve over the run (issue 32: unresolved rows after the sweeps, goal < 1 %)
+            'rows_per_step': solve['total_rows'] / max(solve['steps'], 1),
+            'sweeps_per_step': solve['total_sweeps'] / max(solve['steps'], 1),
+            'unresolved_fraction': solve['total_unresolved'] / max(solve['total_rows'], 1),
+            'largest_miss': solve['max_residual'], 'crossings': solve['crossings'],
             'sweep_order': contact_args['sweep_order']}
 checks, status = {}, 'ok'
 if p.threads > 1:
@@ -164,12 +170,16 @@ if p.threads > 1:
 write_summary(d, 'bench_ballistic', p, measured, {'goal_wall_seconds_per_100us': p.goal_seconds, 'goal_coupled_over_chain': GOAL_RATE,
                'goal_speedup_2_cores': 1.8},
               {'wall_seconds': 's', 'cpu_seconds': 's', 'dt': 's', 'simulated_time': 's', 'cp_steps_per_second': '1/s',
-               'phase_seconds': 's', 'wall_seconds_per_100us': 's', 'chain_only_cp_steps_per_second': '1/s',
+               'phase_seconds': 's', 'wall_seconds_per_100us': 's', 'largest_miss': 'm/s', 'chain_only_cp_steps_per_second': '1/s',
                'chain_only_seconds_each': 's',
                'wall_seconds_n_threads': 's', 'phase_seconds_n_threads': 's'}, status, checks)
 print('bench_ballistic: %d CPs, %d steps of %.3g s (%.1f us) in %.1f s (%.1f s CPU): %.3g CP-steps/s' %
       (ply.engine.n_elements, steps, O.dt, steps * O.dt * 1e6, wall, cpu, rate))
 print('  by phase: ' + ', '.join('%s %.1f s (%.0f %%)' % (k, v, 100 * v / wall) for k, v in phases.items()))
+print('  impulse solve: %.0f rows and %.2f sweeps a step, %.2g %% of the rows unresolved after the sweeps (goal < 1 %%), '
+      'largest miss %.3g m/s; %d crossings live' % (measured['rows_per_step'], measured['sweeps_per_step'],
+                                                   100 * measured['unresolved_fraction'], solve['max_residual'],
+                                                   solve['crossings']))
 print('  springs + integration alone: %.3g CP-steps/s; coupled / alone = %.3g (goal %.3g)' %
       (chain_rate, rate / chain_rate, GOAL_RATE))
 print('  100 us of this scene: %.1f s; goal %.0f s -> %.2fx the goal' % (per_100us, p.goal_seconds, per_100us / p.goal_seconds))

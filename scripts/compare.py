@@ -14,6 +14,9 @@
 # s = 2, 4 up to the case's CPs per span, the contacts then once per s spring steps (s = CPs per span:
 # at the rate of a 1-CP ply). The adaptive cases with substeps run twice: every CP at the substep, and
 # multi-rate (ballistic.py multirate=1: the coarse CPs once per step, docs/design.md).
+#   chords           the default's gap functions and impulses with every crossing measured as the CP pairs
+#                    of its chords (crossings=chords: four contacts a crossing, the default until the
+#                    persistent crossings; docs/collisions.md)
 #   paper            woven as the paper: SAT normal, depth on the sections, impulses (Eq. 5) (contact_model=paper)
 #   penalty          the paper's OBB/SAT geometry, penalty forces k_p * overlap instead of impulses
 #   no_flattening    the paper's method, sections never flatten
@@ -52,7 +55,7 @@ p = read_params({
     'shape': ('sphere', '', "projectile: 'sphere' or 'box' (both models have both)"),
     'size': (3.0e-3, 'm', 'sphere diameter or cube edge'),
     'mass': (0.25e-3, 'kg', 'projectile mass'),
-    'methods': ('', '', 'comma-separated subset of impulse, impulse_adaptive, paper, penalty, no_flattening, section_springs, '
+    'methods': ('', '', 'comma-separated subset of impulse, impulse_adaptive, chords, paper, penalty, no_flattening, section_springs, '
                 'yade_grid (default: all)'),
     'fine_radii': ('1,2', '', "impulse_adaptive's fine_radius values, comma-separated multiples of the projectile's size, "
                    'each in (0, 100]'),
@@ -102,6 +105,7 @@ METHODS = {
     'impulse': ({}, None, [None]),
     # The swept value is fine_radius [m] (the table's 'stiffness' column stays empty for it).
     'impulse_adaptive': ({'cp_coarse': 1}, 'fine_radius', [x * p.size for x in FINE_RADII]),
+    'chords': ({'crossings': 'chords'}, None, [None]),
     'paper': ({'contact_model': 'paper'}, None, [None]),
     # The response and section variants stay on the paper's contact geometry they were charted with.
     'penalty': ({'contact_model': 'paper', 'response': 'penalty'}, 'penalty_stiffness', [1e5, 1e6, 1e7]),
@@ -358,7 +362,7 @@ if best_grid is not None:
 import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt
-MARK = {'impulse': ('o', 'C0'), 'impulse_adaptive': ('P', 'C9'), 'paper': ('v', 'C4'), 'penalty': ('s', 'C1'), 'no_flattening': ('^', 'C2'),
+MARK = {'impulse': ('o', 'C0'), 'impulse_adaptive': ('P', 'C9'), 'chords': ('<', 'C5'), 'paper': ('v', 'C4'), 'penalty': ('s', 'C1'), 'no_flattening': ('^', 'C2'),
         'section_springs': ('D', 'C3'), 'yade_grid': ('X', 'k')}
 fig, ax = plt.subplots(1, 3, figsize=(17, 5.2))
 panels = (('velocity_error', 'velocity-drop error vs reference', 1.0),

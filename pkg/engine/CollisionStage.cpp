@@ -122,14 +122,21 @@ void CollisionStage::trackCrossings(const Fabric& f) {
 
 // The pairs the crossings returned this step start from the crossing's side, their measure held to
 // the room their axes leave (PairMemo::held): the chords, which run inside a crossing's curves by up
-// to a few percent of the thickness, take over without an overlap the curves did not have.
-void CollisionStage::seedReturned() {
+// to a few percent of the thickness, take over without an overlap the curves did not have. Only a
+// pair whose axes lie on that side: a pair of the footprint far from the crossing's point may lie
+// otherwise (a folded or broken piece), and held to the crossing's side it read its axes' distance as
+// an overlap (254 um, a cube at 1000 m/s); it starts as a new pair, from its own geometry.
+void CollisionStage::seedReturned(const Fabric& f) {
   for (const ReturnedFootprint& r : crossings_.returned())
     for (Index a = r.a0; a <= r.a1; ++a)
       for (auto it = std::lower_bound(pairs_.begin(), pairs_.end(), CPPair{a, r.b0});
            it != pairs_.end() && it->a == a && it->b <= r.b1; ++it) {
         PairMemo& pc = memo_[it - pairs_.begin()];
         if (pc.memo) continue;
+        const Index i = f.elem0[it->a], j = f.elem0[it->b];
+        const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
+        const Vec3 d = ((1 - sc.t) * f.pos[j] + sc.t * f.pos[j + 1]) - ((1 - sc.s) * f.pos[i] + sc.s * f.pos[i + 1]);
+        if (d.dot(r.normal) <= 0) continue;
         pc.memo = true, pc.side = false, pc.held = true, pc.memoPoints = 0;
         pc.memoNormal[0] = pc.memoNormal[1] = r.normal;
       }
@@ -333,7 +340,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
       memo_.size() != (gapModel ? pairs_.size() : 0))
     remapCache(caching, gapModel);
   pairsChanged_ = false;
-  if (gapModel) seedReturned();
+  if (gapModel) seedReturned(f);
   if (gapModel) {
     // Each node's major semi-axis [m], and each CP's largest at the MCD (the screen's). The speeds,
     // the CPs' chords and odometers are refit's (every narrow phase follows a refit, with the same
@@ -787,6 +794,8 @@ Real CollisionStage::beforeDrift(Fabric& f, Real dt, Real horizon) {
   stats.maxPenetration = std::max(stats.maxPenetration, stats.penetration);
   stats.maxUnresolved = std::max(stats.maxUnresolved, stats.impulses.unresolved);
   stats.maxResidual = std::max(stats.maxResidual, stats.impulses.residual);
+  stats.totalRows += stats.impulses.rows, stats.totalSweeps += stats.impulses.iterations;
+  stats.totalUnresolved += stats.impulses.unresolved;
   return added + stats.correctionEnergy;
 }
 

@@ -74,6 +74,9 @@ struct CollisionStats {
   CrossingCounts crossings;   ///< the persistent crossings (ContactParams::crossings Persistent)
   long maxUnresolved = 0;     ///< most unresolved impulse rows in one step
   Real maxResidual = 0;       ///< [m/s]
+  /// Since the start: impulse rows, sweeps and rows left unresolved, summed over the steps (the
+  /// benches' fraction of unresolved rows over a run)
+  long totalRows = 0, totalSweeps = 0, totalUnresolved = 0;
   /// wall time in refit, broad, narrow, respond (bodies included) and the position projection after
   /// the drift [s]
   Real seconds[5] = {0, 0, 0, 0, 0};
@@ -202,7 +205,7 @@ class CollisionStage : public StepHook {
   /// formed from the general contacts and measured after the narrow phase (measureCrossings).
   void trackCrossings(const Fabric& f);
   void measureCrossings(const Fabric& f, Real dt, bool formNew);
-  void seedReturned();
+  void seedReturned(const Fabric& f);
   // A pair's memory (model Gap; kept while the broad phase keeps the pair, forgotten with the cache):
   // its kind (Side / Cross hysteresis), the side its normal points to, and the measure its sections
   // claimed (GapFunction.hpp, capMeasure). Apart from PairCache: small, and only this is remapped.

@@ -10,7 +10,8 @@
 // yarns' smooth centre lines from where the crossing was (it walks into the neighbouring CP when
 // the point leaves its CP), then the hand-back rules, each returning the crossing's pairs to the
 // general pipeline:
-//   Break       a CP the crossing's curves read (the point's CP and its neighbours) is broken;
+//   Break       a CP the crossing's curves read (the point's CP and its neighbours), or any CP of its
+//               footprint, is broken;
 //   Separation  the chains' axes at the points are farther apart than the two sections' radii at
 //               rest beyond touching (the yarns have parted: their pairs are measured as any);
 //   Turn        the yarns cross at less than 45 degrees (kTurnDeg; its measure, the half-thicknesses,
@@ -20,6 +21,8 @@
 //               pairs (a node whose chords turn away from the other yarn by 2 alpha leaves them
 //               h (1 - cos alpha) closer than the node: 1 % at a built crossing, 7.6 % at 45
 //               degrees), and the lines come closest in as many places: the chords are the yarn;
+//               or a CP of its footprint turns from the point's by more than kFoldDeg (a piece
+//               folded inside the footprint, whose pairs the general pipeline skips);
 //   Slide       a point leaves its yarn or jumps (more than a quarter CP in a step: the curves'
 //               closest approach moved elsewhere), or its footprint lands on another crossing of
 //               the same two yarns (a folded piece's two crossings met) or finds no room.
@@ -77,6 +80,9 @@ class CrossingContacts {
   /// [deg], and formed only at kFormKinkDeg or less: a built weave's chains turn by 2 x the crimp
   /// angle at a crossing node (16 degrees in KM2 706 at one CP per span).
   static constexpr Real kKinkDeg = 35, kFormKinkDeg = 25;
+  /// ... and where a CP of its footprint is broken or turned from the point's CP by more than this
+  /// [deg] (a piece folded or flying inside the footprint, whose pairs the general pipeline skips).
+  static constexpr Real kFoldDeg = 45;
 
   /// No crossings, for fabric f's CPs.
   void reset(const Fabric& f);
@@ -119,6 +125,7 @@ class CrossingContacts {
   void footprint(const Fabric& f, const Crossing& x, const ContactParams& p, Index& a0, Index& a1, Index& b0,
                  Index& b1) const;
   static int usable(const Fabric& f, const Vec3Array& chord, Index e, Real kinkCos);
+  static int whole(const Fabric& f, const Vec3Array& chord, Index lo, Index hi, Index e);
   void handBack(Index id, HandBack why, std::vector<std::uint8_t>& renew);
   std::vector<Crossing> all_;
   std::vector<std::uint8_t> gone_;  // track: the crossings handed back this step

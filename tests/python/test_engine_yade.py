@@ -88,11 +88,11 @@ def test_instability_stops_with_step_node_cause_and_keeps_last_good_state(yade_n
     path = tmp_path / 'last_good.state'
     e.save_state(str(path), last_good=True)
     raw = path.read_bytes()
-    # format 3, version 4 (pkg/fabric/StateIO.hpp): u32 version, u32 0, u64 fingerprint, int64 nodes, elements,
+    # format 3, version 5 (pkg/fabric/StateIO.hpp): u32 version, u32 0, u64 fingerprint, int64 nodes, elements,
     # yarns, step, double time, double last dt, positions, ...
     assert raw[:8] == b'WOVENST3'
     version, _, _, n, ne, ny, step = struct.unpack('<IIQqqqq', raw[8:56])
-    assert version == 4 and n == 51 and ne == 50 and ny == 1 and step % 3 == 0 and step < err.step
+    assert version == 5 and n == 51 and ne == 50 and ny == 1 and step % 3 == 0 and step < err.step
     X = np.frombuffer(raw[72:72 + 51 * 24], dtype='<f8')
     assert np.all(np.isfinite(X))
     e.restore_last_good()
