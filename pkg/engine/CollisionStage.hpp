@@ -307,7 +307,7 @@ class CollisionStage : public StepHook {
   std::vector<std::uint8_t> rowable_, rowAgain_;  // per contact: it can close its gap within the step (markRowable)
   std::vector<Real> passMove_;         // per node: its travel since the pass measured the contacts [m]
   bool passMoveValid_ = false;         // ... and no check moved a node in between
-  const std::uint8_t* markRowable(const Fabric& f, Real horizon);
+  const std::uint8_t* markRowable(Real horizon);
   Real fastestNear(const Fabric& f, Index e) const;
   ImpulseLaw law_;
   PositionProjection projector_;

@@ -22,6 +22,8 @@ constexpr int kFormSteps = 30;
 constexpr Real kFootprintSlide = 0.05;
 // Most a crossing's points may move in one step, in CP lengths (Slide beyond).
 constexpr Real kJump = 0.25;
+// A tracking step that moved the places farther than this [m] is followed by another (track).
+constexpr Real kRefine = 0.1e-6;
 
 // Footprint reach beyond the other yarn's widest half-width: the CPs' stretch (rest lengths measure
 // the arc) and the margin.
@@ -98,11 +100,17 @@ bool CrossingContacts::track(const Fabric& f, const ContactParams& p, const Vec3
   bool grew = false;
   for (Index id = 0; id < n; ++id) {
     Crossing& x = all_[id];
-    // One Newton step from the last step's closest points: they move far less than a CP a step, so
-    // one step keeps them within (their motion)^2 / (the lines' curvature radius) of the exact ones.
+    // A Newton step from the last step's closest points: they move far less than a CP a step, so
+    // one step keeps them within (their motion)^2 / (the lines' curvature radius) of the exact ones;
+    // up to two more where it moved more than kRefine (a fast slide over a rounded corner, whose
+    // lag left a few um of overlap to the next step, more at a shorter time step).
     YarnPlace a = x.a, b = x.b;
     Real apart = 0;
-    const Real moved = closestStep(f, a, b, &apart);
+    Real moved = closestStep(f, a, b, &apart), last = moved;
+    for (int it = 0; it < 2 && last > kRefine; ++it) {
+      last = closestStep(f, a, b, &apart);
+      moved = last < 0 ? last : moved + last;
+    }
     if (moved < 0) {
       handBack(id, moved == kLeftYarn ? HandBack::Slide : HandBack::Turn, renew);
       continue;

@@ -27,7 +27,7 @@ def test_every_method_runs_and_the_outputs_are_written(quick):
     assert rc == 0, log[-3000:]
     assert s['status'] == 'ok'
     rows = s['measured']['rows']
-    assert {r['method'] for r in rows} == {'impulse', 'impulse_adaptive', 'paper', 'penalty', 'no_flattening',
+    assert {r['method'] for r in rows} == {'impulse', 'impulse_adaptive', 'chords', 'paper', 'penalty', 'no_flattening',
                                            'section_springs', 'yade_grid'}
     for name in ('cases.csv', 'table.md', 'scenes.md', 'pareto.png', 'stability.csv', 'stability.png'):
         assert os.path.getsize(out / name) > 100, name
