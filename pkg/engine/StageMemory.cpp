@@ -15,9 +15,9 @@ namespace woven {
 
 namespace {
 
-constexpr char kMagic[4] = {'W', 'S', 'M', '1'};
+constexpr char kMemoryMagic[4] = {'W', 'S', 'M', '1'};
 
-struct Out {
+struct MemoryOut {
   std::string b;
   template <class T>
   void put(const T& v) { b.append(reinterpret_cast<const char*>(&v), sizeof(T)); }
@@ -28,7 +28,7 @@ struct Out {
   }
 };
 
-struct In {
+struct MemoryIn {
   const std::string& b;
   std::size_t at = 0;
   bool layout = true;  // every raw block had this build's record size
@@ -81,8 +81,8 @@ struct CollisionStage::Memory {
 };
 
 std::string CollisionStage::memory() const {
-  Out o;
-  o.b.append(kMagic, 4);
+  MemoryOut o;
+  o.b.append(kMemoryMagic, 4);
   const std::vector<Crossing>& xs = crossings_.crossings();
   o.put(static_cast<std::uint64_t>(xs.size()));
   for (const Crossing& x : xs) {
@@ -115,8 +115,8 @@ std::string CollisionStage::memory() const {
 }
 
 CollisionStage::Memory CollisionStage::parseMemory(const Fabric& f, const std::string& bytes) const {
-  if (bytes.size() < 4 || std::memcmp(bytes.data(), kMagic, 4) != 0) In::fail("no WSM1 header");
-  In in{bytes, 4};
+  if (bytes.size() < 4 || std::memcmp(bytes.data(), kMemoryMagic, 4) != 0) MemoryIn::fail("no WSM1 header");
+  MemoryIn in{bytes, 4};
   Memory m;
   const Index ne = f.nElems();
   const auto n = in.count(8 * sizeof(Real));
@@ -131,21 +131,21 @@ CollisionStage::Memory CollisionStage::parseMemory(const Fabric& f, const std::s
   for (std::size_t k = 0; k < nk; ++k) {
     CPPair& p = m.keys[k];
     p.a = in.get<Index>(), p.b = in.get<Index>();
-    if (p.a < 0 || p.b >= ne || !(p.a < p.b) || (k > 0 && !(m.keys[k - 1] < p))) In::fail("pairs out of range or order");
+    if (p.a < 0 || p.b >= ne || !(p.a < p.b) || (k > 0 && !(m.keys[k - 1] < p))) MemoryIn::fail("pairs out of range or order");
     PairMemo& q = m.memo[k];
     q.memo = in.get<std::uint8_t>() != 0, q.side = in.get<std::uint8_t>() != 0, q.held = in.get<std::uint8_t>() != 0;
     q.memoPoints = in.get<std::int32_t>();
-    if (q.memoPoints < 0 || q.memoPoints > 2) In::fail("a pair with more than two remembered points");
+    if (q.memoPoints < 0 || q.memoPoints > 2) MemoryIn::fail("a pair with more than two remembered points");
     for (int j = 0; j < 2; ++j) {
       q.memoS[j] = in.get<Real>(), q.memoT[j] = in.get<Real>(), q.memoMeasure[j] = in.get<Real>();
       q.memoNormal[j] = in.get<Vec3>();
       if (!(std::isfinite(q.memoS[j]) && std::isfinite(q.memoT[j]) && std::isfinite(q.memoMeasure[j]) &&
             q.memoNormal[j].allFinite()))
-        In::fail("a pair's memory not finite");
+        MemoryIn::fail("a pair's memory not finite");
     }
   }
   in.raw(m.cache);
-  if (!m.cache.empty() && m.cache.size() != nk) In::fail("carried contacts not one per pair");
+  if (!m.cache.empty() && m.cache.size() != nk) MemoryIn::fail("carried contacts not one per pair");
   m.cacheClock = static_cast<long>(in.get<std::int64_t>());
   in.raw(m.sectionStamp);
   m.heldFor = in.get<std::uint64_t>();
@@ -153,15 +153,15 @@ CollisionStage::Memory CollisionStage::parseMemory(const Fabric& f, const std::s
   in.raw(m.restFlat);
   in.raw(m.restDir);
   in.raw(m.stats);
-  if (in.at != bytes.size()) In::fail("trailing bytes");
+  if (in.at != bytes.size()) MemoryIn::fail("trailing bytes");
   m.layout = in.layout;
   for (const BodyContact& c : m.held)
-    if (c.cp < 0 || c.cp >= ne || c.body < 0 || static_cast<std::size_t>(c.body) >= m.heldFor) In::fail("a body contact out of range");
+    if (c.cp < 0 || c.cp >= ne || c.body < 0 || static_cast<std::size_t>(c.body) >= m.heldFor) MemoryIn::fail("a body contact out of range");
   for (const PairCache& c : m.cache)
-    if (c.contact.cpA < 0 || c.contact.cpB >= ne) In::fail("a carried contact out of range");
-  if (!m.sectionStamp.empty() && static_cast<Index>(m.sectionStamp.size()) != ne) In::fail("section stamps not one per CP");
+    if (c.contact.cpA < 0 || c.contact.cpB >= ne) MemoryIn::fail("a carried contact out of range");
+  if (!m.sectionStamp.empty() && static_cast<Index>(m.sectionStamp.size()) != ne) MemoryIn::fail("section stamps not one per CP");
   if (m.restFlat.size() != m.restDir.size() || (!m.restFlat.empty() && m.restFlat.size() != f.secFlat.size()))
-    In::fail("rest sections not one per node");
+    MemoryIn::fail("rest sections not one per node");
   return m;
 }
 
