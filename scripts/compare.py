@@ -426,7 +426,8 @@ if p.map:
               'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 20, 'cp_per_span': 1, 'energy_limit': 0.99,
               'overlap_limit': 100, 'pictures': 0, 'backface': 0}
     # The adaptive method is the impulse method at another resolution: the map's scene is at 1 CP.
-    MAP_METHODS = [m for m in METHODS if m != 'impulse_adaptive']
+    # (the chord contacts share the default's gap functions, rows and projection: no row of their own)
+    MAP_METHODS = [m for m in METHODS if m not in ('impulse_adaptive', 'chords')]
     jobs = []
     for method in MAP_METHODS:
         extra, kkey, _ = METHODS[method]

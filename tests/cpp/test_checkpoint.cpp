@@ -4,6 +4,7 @@
 // pairs' measure memory, last body contacts) travels in the state file and the snapshot; before, a
 // save forgot it and the saving run left the straight one (3.4 mm, 460 m/s, 10 against 4 breaks).
 #include "body_util.hpp"
+#include "chain_util.hpp"
 #include "engine/FabricEngine.hpp"
 #include "engine/Snapshot.hpp"
 #include "fabric/StateIO.hpp"
@@ -68,7 +69,9 @@ void checkpointIsAnObservation(const Scene& sc) {
   auto straight = struckPly(sc);
   const Real dt = 0.7 * straight->criticalDt();
   for (int s = 0; s < end; ++s) straight->step(dt);
-  if (sc.breakage) EXPECT_GT(straight->dynamics().breakage().brokenElements(), 0) << "the cube breaks elements";
+  if (sc.breakage) {
+    EXPECT_GT(straight->dynamics().breakage().brokenElements(), 0) << "the cube breaks elements";
+  }
 
   // The saving run: a state file at 60 and 140, a snapshot at 100.
   auto saving = struckPly(sc);
@@ -89,7 +92,9 @@ void checkpointIsAnObservation(const Scene& sc) {
     }
     saving->step(dt);
   }
-  if (sc.crossings == Crossings::Persistent && sc.model == ContactModel::Gap) EXPECT_GT(crossingsAtSave, 0);
+  if (sc.crossings == Crossings::Persistent && sc.model == ContactModel::Gap) {
+    EXPECT_GT(crossingsAtSave, 0);
+  }
   EXPECT_GT(contactsAtSave, 0) << "contacts active at the saves";
   expectSame(*straight, *saving, "the saving run against the straight run");
 
@@ -110,13 +115,18 @@ void checkpointIsAnObservation(const Scene& sc) {
 
 TEST(Checkpoint, PersistentCrossingsWithBreakage) { checkpointIsAnObservation(Scene{}); }
 
+// Sanitizer builds run the default (persistent crossings, breakage) and the paper model's memory,
+// the two layouts of the stage's memory; the Release tests all four (the four took 152 s of the
+// sanitizer tier's 371).
 TEST(Checkpoint, PersistentCrossingsWithoutBreakage) {
+  if (kSlowBuild) GTEST_SKIP() << "sanitizer build: the Release tests run it";
   Scene s;
   s.breakage = false;
   checkpointIsAnObservation(s);
 }
 
 TEST(Checkpoint, ChordContactsWithBreakage) {
+  if (kSlowBuild) GTEST_SKIP() << "sanitizer build: the Release tests run it";
   Scene s;
   s.crossings = Crossings::Chords;
   checkpointIsAnObservation(s);
