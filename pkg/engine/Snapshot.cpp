@@ -1,4 +1,5 @@
 #include "engine/Snapshot.hpp"
+#include "core/ByteStream.hpp"
 #include "core/Errors.hpp"
 #include <cmath>
 #include <cstring>
@@ -18,43 +19,9 @@ std::uint64_t fnv64(const char* p, std::size_t n) {
   return h;
 }
 
-struct Out {
-  std::string b;
-  template <class T>
-  void put(const T& v) { b.append(reinterpret_cast<const char*>(&v), sizeof(T)); }
-  template <class T>
-  void vec(const std::vector<T>& a) {
-    put(static_cast<std::uint64_t>(a.size()));
-    if (!a.empty()) b.append(reinterpret_cast<const char*>(a.data()), a.size() * sizeof(T));
-  }
-};
-
-struct In {
-  const std::string& b;
-  std::size_t at = 0;
-  [[noreturn]] static void fail(const std::string& what) {
-    throw ParameterError("snapshot", what, "bytes written by woven::engineSnapshot (format WOVENSN2 or WOVENSN1)");
-  }
-  void need(std::size_t n) const {
-    if (n > b.size() - at) fail("truncated bytes");
-  }
-  template <class T>
-  T get() {
-    T v;
-    need(sizeof(T));
-    std::memcpy(static_cast<void*>(&v), b.data() + at, sizeof(T));  // T is trivially copyable in its bytes (Eigen fixed-size)
-    at += sizeof(T);
-    return v;
-  }
-  template <class T>
-  void vec(std::vector<T>& a) {
-    const auto n = get<std::uint64_t>();
-    if (n > (b.size() - at) / sizeof(T)) fail("truncated bytes");
-    a.resize(n);
-    if (n) std::memcpy(static_cast<void*>(a.data()), b.data() + at, n * sizeof(T));
-    at += n * sizeof(T);
-  }
-};
+[[noreturn]] void snapshotFails(const std::string& what) {
+  throw ParameterError("snapshot", what, "bytes written by woven::engineSnapshot (format WOVENSN2 or WOVENSN1)");
+}
 
 // Plain structs go as their bytes (trivially copyable, same build): checked at compile time.
 static_assert(std::is_trivially_copyable<Yarn>::value && std::is_trivially_copyable<YarnMaterial>::value &&
@@ -63,7 +30,7 @@ static_assert(std::is_trivially_copyable<Yarn>::value && std::is_trivially_copya
                   std::is_trivially_copyable<InstabilityLimits>::value,
               "snapshot: a plain struct is no longer trivially copyable");
 
-void putBreakEvents(Out& o, const std::vector<BreakEvent>& log) {
+void putBreakEvents(ByteWriter& o, const std::vector<BreakEvent>& log) {
   o.put(static_cast<std::uint64_t>(log.size()));
   for (const BreakEvent& ev : log) {
     o.put(static_cast<std::int64_t>(ev.step)), o.put(ev.time), o.put(ev.yarn), o.put(ev.element);
@@ -71,10 +38,8 @@ void putBreakEvents(Out& o, const std::vector<BreakEvent>& log) {
   }
 }
 
-void getBreakEvents(In& in, std::vector<BreakEvent>& log) {
-  const auto n = in.get<std::uint64_t>();
-  if (n > in.b.size()) In::fail("truncated bytes");
-  log.resize(n);
+void getBreakEvents(ByteReader& in, std::vector<BreakEvent>& log) {
+  log.resize(in.count(1));
   for (BreakEvent& ev : log) {
     ev.step = static_cast<long>(in.get<std::int64_t>()), ev.time = in.get<Real>(), ev.yarn = in.get<Index>();
     ev.element = in.get<Index>(), ev.position = in.get<Vec3>(), ev.strain = in.get<Real>();
@@ -87,7 +52,7 @@ void getBreakEvents(In& in, std::vector<BreakEvent>& log) {
 std::string engineSnapshot(FabricEngine& e) {
   const Fabric& f = e.fabric();
   const ChainDynamics& d = e.dynamics();
-  Out o;
+  ByteWriter o;
   o.b.append(kMagic, 8);
   // Fabric: every array (forces, strains and tensions are recomputed on restore).
   o.vec(f.pos), o.vec(f.vel), o.vec(f.mass), o.vec(f.invMass), o.vec(f.nodeYarn);
@@ -132,12 +97,12 @@ std::string engineSnapshot(FabricEngine& e) {
 
 std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
   const bool sn2 = bytes.size() >= 16 && std::memcmp(bytes.data(), kMagic, 8) == 0;
-  if (!sn2 && (bytes.size() < 16 || std::memcmp(bytes.data(), kMagic1, 8) != 0)) In::fail("no WOVENSN2 or WOVENSN1 header");
+  if (!sn2 && (bytes.size() < 16 || std::memcmp(bytes.data(), kMagic1, 8) != 0)) snapshotFails("no WOVENSN2 or WOVENSN1 header");
   std::uint64_t sum;
   std::memcpy(&sum, bytes.data() + bytes.size() - 8, 8);
-  if (sum != fnv64(bytes.data(), bytes.size() - 8)) In::fail("checksum mismatch");
+  if (sum != fnv64(bytes.data(), bytes.size() - 8)) snapshotFails("checksum mismatch");
   const std::string body = bytes.substr(0, bytes.size() - 8);
-  In in{body, 8};
+  ByteReader in(body, 8, snapshotFails);
   Fabric f;
   in.vec(f.pos), in.vec(f.vel), in.vec(f.mass), in.vec(f.invMass), in.vec(f.nodeYarn);
   in.vec(f.secRadius), in.vec(f.secFlat), in.vec(f.secDir);
@@ -147,16 +112,16 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
   if (f.vel.size() != n || f.mass.size() != n || f.invMass.size() != n || f.nodeYarn.size() != n ||
       f.secRadius.size() != n || f.secFlat.size() != n || f.secDir.size() != n || f.restLength.size() != ne ||
       f.stiffness.size() != ne || f.damping.size() != ne || f.alive.size() != ne || f.elemYarn.size() != ne)
-    In::fail("inconsistent array sizes");
+    in.fail("inconsistent array sizes");
   for (const Yarn& y : f.yarns)
     if (y.material < 0 || static_cast<std::size_t>(y.material) >= f.materials.size() || y.firstNode < 0 ||
         y.firstElem < 0 || static_cast<std::size_t>(y.firstNode) + y.nNodes > n ||
         static_cast<std::size_t>(y.firstElem) + y.nElems > ne)
-      In::fail("a yarn outside the arrays");
+      in.fail("a yarn outside the arrays");
   for (std::size_t e = 0; e < ne; ++e)
     if (f.elemYarn[e] < 0 || static_cast<std::size_t>(f.elemYarn[e]) >= f.yarns.size() || f.elem0[e] < 0 ||
         static_cast<std::size_t>(f.elem0[e]) + 1 >= n)
-      In::fail("an element outside the arrays");
+      in.fail("an element outside the arrays");
   KinematicState s;
   s.pos = f.pos, s.vel = f.vel, s.flat = f.secFlat, s.dir = f.secDir;
   s.alive = f.alive, s.stiffness = f.stiffness, s.damping = f.damping;
@@ -172,7 +137,7 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
   L.bodyAcceleration = in.get<Vec3>(), in.vec(L.kinematicNodes), in.vec(L.kinematicVelocity);
   L.velocityRamp = in.get<Real>(), in.vec(L.forceNodes), in.vec(L.forceValues);
   if (L.kinematicVelocity.size() != L.kinematicNodes.size() || L.forceValues.size() != L.forceNodes.size())
-    In::fail("inconsistent loads");
+    in.fail("inconsistent loads");
   const auto limits = in.get<InstabilityLimits>();
   auto e = std::make_shared<FabricEngine>(std::move(f));
   ChainDynamics& d = e->dynamics();
@@ -187,14 +152,11 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
     e->enableCollisions(p, broad);
     CollisionStage& st = *e->collisions();
     st.bodyCollider.skin = in.get<Real>(), st.tree.rebuildRatio = in.get<Real>();
-    const auto nb = in.get<std::uint64_t>();
-    if (nb > in.b.size()) In::fail("truncated bytes");
+    const auto nb = in.count(1);
     for (std::uint64_t k = 0; k < nb; ++k) {
       RigidBody b;
       b.id = static_cast<long>(in.get<std::int64_t>());
-      const auto np = in.get<std::uint64_t>();
-      if (np > in.b.size()) In::fail("truncated bytes");
-      b.parts.resize(np);
+      b.parts.resize(in.count(1));
       for (RigidPart& q : b.parts) {
         q.type = in.get<RigidPart::Type>(), q.halfSize = in.get<Vec3>(), q.radius = in.get<Real>();
         q.offset = in.get<Vec3>(), q.ori.coeffs() = in.get<Eigen::Matrix<Real, 4, 1>>();
@@ -217,22 +179,21 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
   int substeps = 1;
   bool multiRate = false;
   if (sn2) {
-    const auto nc = in.get<std::uint64_t>();
-    if (nc > in.b.size() - in.at) In::fail("truncated bytes");
-    s.contacts.assign(in.b.data() + in.at, static_cast<std::size_t>(nc));
-    in.at += static_cast<std::size_t>(nc);
+    const auto nc = static_cast<std::size_t>(in.count(1));
+    s.contacts.assign(body.data() + in.at(), nc);
+    in.skip(nc);
     substeps = in.get<std::int32_t>();
-    if (substeps < 1 || substeps > 64) In::fail("substeps outside [1, 64]");
+    if (substeps < 1 || substeps > 64) in.fail("substeps outside [1, 64]");
     const auto flag = in.get<std::uint8_t>();
-    if (flag > 1) In::fail("multi-rate flag other than 0 or 1");
+    if (flag > 1) in.fail("multi-rate flag other than 0 or 1");
     multiRate = flag == 1;
-  } else if (const std::size_t left = in.b.size() - in.at; left == sizeof(std::int32_t) || left == sizeof(std::int32_t) + 1) {
+  } else if (const std::size_t left = in.left(); left == sizeof(std::int32_t) || left == sizeof(std::int32_t) + 1) {
     substeps = in.get<std::int32_t>();
-    if (substeps < 2 || substeps > 64) In::fail("substeps outside [2, 64]");
-    if (left > sizeof(std::int32_t) && in.get<std::uint8_t>() != 1) In::fail("multi-rate flag other than 1");
+    if (substeps < 2 || substeps > 64) in.fail("substeps outside [2, 64]");
+    if (left > sizeof(std::int32_t) && in.get<std::uint8_t>() != 1) in.fail("multi-rate flag other than 1");
     multiRate = left > sizeof(std::int32_t);
   }
-  if (in.at != in.b.size()) In::fail("trailing bytes");
+  if (in.left() != 0) in.fail("trailing bytes");
   if (substeps > 1) e->setSubsteps(substeps);
   e->setMultiRate(multiRate);  // before setState: it chooses the slow elements the state was saved with
   e->setState(s);  // checks everything (topology fingerprint, ranges) and puts clock, books, breaks back

@@ -7,6 +7,7 @@
 // The crossings and the pair memory go field by field; the carried contacts, body contacts and
 // statistics as their bytes with their size, which another build's layout fails (the memory is then
 // dropped: the state loads, and the run continues as one that forgot it).
+#include "core/ByteStream.hpp"
 #include "core/Errors.hpp"
 #include "engine/CollisionStage.hpp"
 #include <cstring>
@@ -17,50 +18,9 @@ namespace {
 
 constexpr char kMemoryMagic[4] = {'W', 'S', 'M', '1'};
 
-struct MemoryOut {
-  std::string b;
-  template <class T>
-  void put(const T& v) { b.append(reinterpret_cast<const char*>(&v), sizeof(T)); }
-  template <class T>
-  void raw(const std::vector<T>& a) {
-    put(static_cast<std::uint64_t>(a.size())), put(static_cast<std::uint64_t>(sizeof(T)));
-    if (!a.empty()) b.append(reinterpret_cast<const char*>(a.data()), a.size() * sizeof(T));
-  }
-};
-
-struct MemoryIn {
-  const std::string& b;
-  std::size_t at = 0;
-  bool layout = true;  // every raw block had this build's record size
-  [[noreturn]] static void fail(const std::string& what) {
-    throw ParameterError("state", "contact memory: " + what, "the memory a woven collision stage wrote");
-  }
-  template <class T>
-  T get() {
-    if (sizeof(T) > b.size() - at) fail("truncated");
-    T v;
-    std::memcpy(static_cast<void*>(&v), b.data() + at, sizeof(T));
-    at += sizeof(T);
-    return v;
-  }
-  std::uint64_t count(std::size_t least) {
-    const auto n = get<std::uint64_t>();
-    if (n > (b.size() - at) / std::max<std::size_t>(least, 1)) fail("a count past the end");
-    return n;
-  }
-  template <class T>
-  void raw(std::vector<T>& a) {
-    const auto n = get<std::uint64_t>(), size = get<std::uint64_t>();
-    if (size == 0 || n > (b.size() - at) / size) fail("a block past the end");
-    if (size != sizeof(T)) {
-      layout = false, at += n * size, a.clear();
-      return;
-    }
-    a.resize(n);
-    if (n) std::memcpy(static_cast<void*>(a.data()), b.data() + at, n * sizeof(T));
-    at += n * sizeof(T);
-  }
-};
+[[noreturn]] void memoryFails(const std::string& what) {
+  throw ParameterError("state", "contact memory: " + what, "the memory a woven collision stage wrote");
+}
 
 }  // namespace
 
@@ -81,7 +41,7 @@ struct CollisionStage::Memory {
 };
 
 std::string CollisionStage::memory() const {
-  MemoryOut o;
+  ByteWriter o;
   o.b.append(kMemoryMagic, 4);
   const std::vector<Crossing>& xs = crossings_.crossings();
   o.put(static_cast<std::uint64_t>(xs.size()));
@@ -103,20 +63,20 @@ std::string CollisionStage::memory() const {
   std::vector<PairCache> cache;
   if (!cache_.empty())
     for (std::size_t k : kept) cache.push_back(cache_[k]);
-  o.raw(cache);
+  o.sized(cache);
   o.put(static_cast<std::int64_t>(cacheClock_));
-  o.raw(sectionStamp_);
+  o.sized(sectionStamp_);
   o.put(static_cast<std::uint64_t>(bodies.size()));
-  o.raw(bodyContacts_);  // the next step's measure memory
-  o.raw(restFlat_);
-  o.raw(restDir_);
-  o.raw(std::vector<CollisionStats>{stats});
+  o.sized(bodyContacts_);  // the next step's measure memory
+  o.sized(restFlat_);
+  o.sized(restDir_);
+  o.sized(std::vector<CollisionStats>{stats});
   return o.b;
 }
 
 CollisionStage::Memory CollisionStage::parseMemory(const Fabric& f, const std::string& bytes) const {
-  if (bytes.size() < 4 || std::memcmp(bytes.data(), kMemoryMagic, 4) != 0) MemoryIn::fail("no WSM1 header");
-  MemoryIn in{bytes, 4};
+  if (bytes.size() < 4 || std::memcmp(bytes.data(), kMemoryMagic, 4) != 0) memoryFails("no WSM1 header");
+  ByteReader in(bytes, 4, memoryFails);
   Memory m;
   const Index ne = f.nElems();
   const auto n = in.count(8 * sizeof(Real));
@@ -131,37 +91,36 @@ CollisionStage::Memory CollisionStage::parseMemory(const Fabric& f, const std::s
   for (std::size_t k = 0; k < nk; ++k) {
     CPPair& p = m.keys[k];
     p.a = in.get<Index>(), p.b = in.get<Index>();
-    if (p.a < 0 || p.b >= ne || !(p.a < p.b) || (k > 0 && !(m.keys[k - 1] < p))) MemoryIn::fail("pairs out of range or order");
+    if (p.a < 0 || p.b >= ne || !(p.a < p.b) || (k > 0 && !(m.keys[k - 1] < p))) in.fail("pairs out of range or order");
     PairMemo& q = m.memo[k];
     q.memo = in.get<std::uint8_t>() != 0, q.side = in.get<std::uint8_t>() != 0, q.held = in.get<std::uint8_t>() != 0;
     q.memoPoints = in.get<std::int32_t>();
-    if (q.memoPoints < 0 || q.memoPoints > 2) MemoryIn::fail("a pair with more than two remembered points");
+    if (q.memoPoints < 0 || q.memoPoints > 2) in.fail("a pair with more than two remembered points");
     for (int j = 0; j < 2; ++j) {
       q.memoS[j] = in.get<Real>(), q.memoT[j] = in.get<Real>(), q.memoMeasure[j] = in.get<Real>();
       q.memoNormal[j] = in.get<Vec3>();
       if (!(std::isfinite(q.memoS[j]) && std::isfinite(q.memoT[j]) && std::isfinite(q.memoMeasure[j]) &&
             q.memoNormal[j].allFinite()))
-        MemoryIn::fail("a pair's memory not finite");
+        in.fail("a pair's memory not finite");
     }
   }
-  in.raw(m.cache);
-  if (!m.cache.empty() && m.cache.size() != nk) MemoryIn::fail("carried contacts not one per pair");
+  m.layout = in.sized(m.cache);
+  if (!m.cache.empty() && m.cache.size() != nk) in.fail("carried contacts not one per pair");
   m.cacheClock = static_cast<long>(in.get<std::int64_t>());
-  in.raw(m.sectionStamp);
+  m.layout &= in.sized(m.sectionStamp);
   m.heldFor = in.get<std::uint64_t>();
-  in.raw(m.held);
-  in.raw(m.restFlat);
-  in.raw(m.restDir);
-  in.raw(m.stats);
-  if (in.at != bytes.size()) MemoryIn::fail("trailing bytes");
-  m.layout = in.layout;
+  m.layout &= in.sized(m.held);
+  m.layout &= in.sized(m.restFlat);
+  m.layout &= in.sized(m.restDir);
+  m.layout &= in.sized(m.stats);
+  if (in.left() != 0) in.fail("trailing bytes");
   for (const BodyContact& c : m.held)
-    if (c.cp < 0 || c.cp >= ne || c.body < 0 || static_cast<std::size_t>(c.body) >= m.heldFor) MemoryIn::fail("a body contact out of range");
+    if (c.cp < 0 || c.cp >= ne || c.body < 0 || static_cast<std::size_t>(c.body) >= m.heldFor) in.fail("a body contact out of range");
   for (const PairCache& c : m.cache)
-    if (c.contact.cpA < 0 || c.contact.cpB >= ne) MemoryIn::fail("a carried contact out of range");
-  if (!m.sectionStamp.empty() && static_cast<Index>(m.sectionStamp.size()) != ne) MemoryIn::fail("section stamps not one per CP");
+    if (c.contact.cpA < 0 || c.contact.cpB >= ne) in.fail("a carried contact out of range");
+  if (!m.sectionStamp.empty() && static_cast<Index>(m.sectionStamp.size()) != ne) in.fail("section stamps not one per CP");
   if (m.restFlat.size() != m.restDir.size() || (!m.restFlat.empty() && m.restFlat.size() != f.secFlat.size()))
-    MemoryIn::fail("rest sections not one per node");
+    in.fail("rest sections not one per node");
   return m;
 }
 

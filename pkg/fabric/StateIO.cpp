@@ -1,4 +1,5 @@
 #include "fabric/StateIO.hpp"
+#include "core/ByteStream.hpp"
 #include "core/Errors.hpp"
 #include "fabric/Fabric.hpp"
 #include <cerrno>
@@ -31,51 +32,6 @@ void checkPath(const std::string& path) {
     throw ParameterError("path", "'" + path.substr(0, path.find('\0')) + "\\0...'", "a file path without NUL characters");
   if (path.empty()) throw ParameterError("path", "''", "a non-empty file path");
 }
-
-class Writer {
- public:
-  std::string out;
-  template <class T>
-  void put(const T& v) { out.append(reinterpret_cast<const char*>(&v), sizeof(T)); }
-  void raw(const void* p, std::size_t n) { out.append(static_cast<const char*>(p), n); }
-  void vecs(const Vec3Array& a) { raw(a.data(), a.size() * sizeof(Vec3)); }
-  template <class T>
-  void arr(const std::vector<T>& a) { raw(a.data(), a.size() * sizeof(T)); }
-};
-
-class Reader {
- public:
-  Reader(const std::string& b, const std::string& path) : buf_(b), path_(path) {}
-  template <class T>
-  T get() {
-    T v;
-    need(sizeof(T));
-    std::memcpy(&v, buf_.data() + at_, sizeof(T));
-    at_ += sizeof(T);
-    return v;
-  }
-  template <class T>
-  void arr(std::vector<T>& a, std::size_t n) {
-    need(n * sizeof(T));
-    a.resize(n);
-    if (n) std::memcpy(a.data(), buf_.data() + at_, n * sizeof(T));
-    at_ += n * sizeof(T);
-  }
-  std::size_t at() const { return at_; }
-  void skip(std::size_t n) {
-    need(n);
-    at_ += n;
-  }
-  [[noreturn]] void fail(const std::string& what) const { throw ParameterError("state", "'" + path_ + "'", "a woven state file (format 3): " + what); }
-  void need(std::size_t n) const {
-    if (n > buf_.size() - at_) fail("the file is truncated");
-  }
-
- private:
-  const std::string& buf_;
-  const std::string& path_;
-  std::size_t at_ = 0;
-};
 
 std::string errnoText(int err) { return std::strerror(err); }
 
@@ -170,15 +126,15 @@ void saveState(const std::string& path, const KinematicState& s) {
   if (s.vel.size() != s.pos.size() || s.flat.size() != s.pos.size() || s.dir.size() != s.pos.size() ||
       s.stiffness.size() != s.alive.size() || s.damping.size() != s.alive.size())
     throw std::logic_error("woven: saveState given an inconsistent state");
-  Writer w;
-  w.raw(kMagic3, 8);
+  ByteWriter w;
+  w.bytes(kMagic3, 8);
   w.put(kVersion);
   w.put(std::uint32_t(0));
   w.put(s.topology);
   w.put(n), w.put(ne), w.put(ny);
   w.put(static_cast<std::int64_t>(s.step));
   w.put(s.time), w.put(s.lastDt);
-  w.vecs(s.pos), w.vecs(s.vel), w.arr(s.flat), w.vecs(s.dir);
+  w.arr(s.pos), w.arr(s.vel), w.arr(s.flat), w.arr(s.dir);
   w.arr(s.alive), w.arr(s.stiffness), w.arr(s.damping);
   w.put(std::uint8_t(s.booksStarted)), w.put(std::uint8_t(s.springSeen));
   const EnergyBooks& b = s.books;
@@ -192,13 +148,13 @@ void saveState(const std::string& path, const KinematicState& s) {
   w.put(static_cast<std::int64_t>(s.breakage.log.size()));
   for (const BreakEvent& ev : s.breakage.log) {
     w.put(static_cast<std::int64_t>(ev.step)), w.put(ev.time), w.put(std::int32_t(ev.yarn)), w.put(std::int32_t(ev.element));
-    w.vecs(Vec3Array{ev.position});
+    w.put(ev.position);
     w.put(ev.strain), w.put(ev.rawStrain), w.put(ev.energy);
   }
   w.put(static_cast<std::int64_t>(s.contacts.size()));
-  w.raw(s.contacts.data(), s.contacts.size());
-  w.put(fnv(w.out.data(), w.out.size()));
-  writeFileAtomic(path, w.out);
+  w.bytes(s.contacts.data(), s.contacts.size());
+  w.put(fnv(w.b.data(), w.b.size()));
+  writeFileAtomic(path, w.b);
 }
 
 KinematicState loadState(const std::string& path, long expectNodes) {
@@ -217,7 +173,9 @@ KinematicState loadState(const std::string& path, long expectNodes) {
     std::fclose(in);
     if (err) throw ParameterError("path", "'" + path + "'", "a readable woven state file (read error)");
   }
-  Reader r(buf, path);
+  ByteReader r(buf, 0, [&path](const std::string& what) {
+    throw ParameterError("state", "'" + path + "'", "a woven state file (format 3): " + what);
+  });
   KinematicState s;
   if (buf.size() < 8) r.fail("the file is truncated");
   if (std::memcmp(buf.data(), "WOVENST", 7) != 0) r.fail("not a woven state file (no WOVENST magic)");

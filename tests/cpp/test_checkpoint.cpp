@@ -8,6 +8,7 @@
 #include "engine/FabricEngine.hpp"
 #include "engine/Snapshot.hpp"
 #include "fabric/StateIO.hpp"
+#include "same_bits.hpp"
 #include "weave/WeaveBuilder.hpp"
 #include <gtest/gtest.h>
 #include <cstdio>
@@ -45,23 +46,9 @@ std::unique_ptr<FabricEngine> struckPly(const Scene& sc) {
   return e;
 }
 
-template <class T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
-}
-
 void expectSame(FabricEngine& a, FabricEngine& b, const std::string& what) {
   SCOPED_TRACE(what);
-  EXPECT_EQ(a.dynamics().stepCount(), b.dynamics().stepCount());
-  EXPECT_TRUE(sameBits(a.fabric().pos, b.fabric().pos)) << "positions";
-  EXPECT_TRUE(sameBits(a.fabric().vel, b.fabric().vel)) << "velocities";
-  EXPECT_TRUE(sameBits(a.fabric().secFlat, b.fabric().secFlat)) << "sections";
-  EXPECT_TRUE(sameBits(a.fabric().alive, b.fabric().alive)) << "broken elements";
-  const EnergyBooks x = a.dynamics().energy(), y = b.dynamics().energy();
-  EXPECT_EQ(std::memcmp(&x, &y, sizeof(EnergyBooks)), 0) << "energy books";
-  const RigidBody &p = a.collisions()->bodies[0], &q = b.collisions()->bodies[0];
-  EXPECT_EQ(std::memcmp(p.pos.data(), q.pos.data(), sizeof(Vec3)), 0) << "body position";
-  EXPECT_EQ(std::memcmp(p.vel.data(), q.vel.data(), sizeof(Vec3)), 0) << "body velocity";
+  expectSameRun(a, b);
 }
 
 void checkpointIsAnObservation(const Scene& sc) {

@@ -6,6 +6,7 @@
 #include "engine/FabricEngine.hpp"
 #include "fabric/StateIO.hpp"
 #include "weave/WeaveBuilder.hpp"
+#include "same_bits.hpp"
 #include <gtest/gtest.h>
 #include <csignal>
 #include <cstdio>
@@ -24,11 +25,6 @@ namespace {
 
 std::string tempPath(const std::string& name) {
   return ::testing::TempDir() + "woven_rel_" + name + "_" + std::to_string(::getpid()) + ".state";
-}
-
-template <class T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
 }
 
 std::string readAll(const std::string& path) {

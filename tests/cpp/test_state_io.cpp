@@ -3,6 +3,7 @@
 #include "chain_util.hpp"
 #include "engine/FabricEngine.hpp"
 #include "fabric/StateIO.hpp"
+#include "same_bits.hpp"
 #include <gtest/gtest.h>
 #include <cstdio>
 #include <cstring>
@@ -16,10 +17,6 @@ namespace {
 
 std::string tempPath(const std::string& name) {
   return ::testing::TempDir() + "woven_" + name + "_" + std::to_string(::getpid()) + ".state";
-}
-
-bool sameBits(const Vec3Array& a, const Vec3Array& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)) == 0;
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include "law/RowBlocks.hpp"
 #include "law/RowColouring.hpp"
 #include "weave/WeaveBuilder.hpp"
+#include "same_bits.hpp"
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <cstring>
@@ -32,11 +33,6 @@ struct Outcome {
   std::vector<BodyContact> bodyContactList;
   long impulseRows = 0, projected = 0;
 };
-
-template <class T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
-}
 
 void expectSame(const Outcome& a, const Outcome& b, int threads) {
   EXPECT_TRUE(sameBits(a.pos, b.pos)) << threads << " threads: positions";
