@@ -57,6 +57,8 @@ p = read_params({
     'mass': (0.25e-3, 'kg', 'projectile mass'),
     'methods': ('', '', 'comma-separated subset of impulse, impulse_adaptive, chords, paper, penalty, no_flattening, section_springs, '
                 'yade_grid (default: all)'),
+    'map_methods': ('', '', "the stability map's methods, comma-separated, among those run (default: every method "
+                    "run but impulse_adaptive and chords, which share the impulse method's map)"),
     'fine_radii': ('1,2', '', "impulse_adaptive's fine_radius values, comma-separated multiples of the projectile's size, "
                    'each in (0, 100]'),
     'timeout': (900, 's', 'longest a single run may take'),
@@ -118,6 +120,14 @@ if p.methods:
     if not chosen or any(m not in METHODS for m in chosen) or 'impulse' not in chosen:
         bad('methods', 'a comma-separated subset of %s that includes impulse (the reference)' % ', '.join(METHODS))
     METHODS = {m: METHODS[m] for m in METHODS if m in chosen}
+# The stability map's methods. The adaptive method is the impulse method at another resolution (the
+# map's scene is at 1 CP); the chord contacts share the default's gap functions, rows and projection.
+MAP_METHODS = [m for m in METHODS if m not in ('impulse_adaptive', 'chords')]
+if p.map_methods:
+    asked = [m.strip() for m in p.map_methods.split(',') if m.strip()]
+    if not asked or any(m not in MAP_METHODS for m in asked):
+        bad('map_methods', 'a comma-separated subset of %s' % ', '.join(MAP_METHODS))
+    MAP_METHODS = [m for m in MAP_METHODS if m in asked]
 DT_KEY = {'yade_grid': 'dt_factor'}  # the others: 'safety' (fraction of the chain's dt_crit)
 SCENE = {'side': side, 't_end': t_end, 'V': p.V, 'shape': p.shape, 'size': p.size, 'mass': p.mass,
          'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 50, 'energy_limit': 0.99, 'overlap_limit': 100,
@@ -425,9 +435,6 @@ if p.map:
     MSCENE = {'side': 0.00635, 't_end': 8e-6, 'shape': 'sphere', 'size': 1.5e-3, 'mass': 0.05e-3,
               'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 20, 'cp_per_span': 1, 'energy_limit': 0.99,
               'overlap_limit': 100, 'pictures': 0, 'backface': 0}
-    # The adaptive method is the impulse method at another resolution: the map's scene is at 1 CP.
-    # (the chord contacts share the default's gap functions, rows and projection: no row of their own)
-    MAP_METHODS = [m for m in METHODS if m not in ('impulse_adaptive', 'chords')]
     jobs = []
     for method in MAP_METHODS:
         extra, kkey, _ = METHODS[method]

@@ -52,7 +52,9 @@ void expectSame(FabricEngine& a, FabricEngine& b, const std::string& what) {
 }
 
 void checkpointIsAnObservation(const Scene& sc) {
-  const int end = 200, saveAt[3] = {60, 100, 140};  // the cube touches at ~60; breaks from ~100
+  // The cube touches at ~60; breaks from ~100. Sanitizer builds stop 10 steps after the last save
+  // (the paper model's run was 95 s of their tier).
+  const int end = kSlowBuild ? 150 : 200, saveAt[3] = {60, 100, 140};
   auto straight = struckPly(sc);
   const Real dt = 0.7 * straight->criticalDt();
   for (int s = 0; s < end; ++s) straight->step(dt);

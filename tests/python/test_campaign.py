@@ -1,8 +1,9 @@
 """V50 campaigns (scripts/campaign.py, woven.campaign): 16 impacts of a tiny scene on the local backend,
-killed halfway and resumed without redoing finished runs; the same 16 on a 2-worker Dask LocalCluster,
-bit for bit; an unreachable scheduler refused naming the key; bad keys refused; the bootstrap interval."""
+killed halfway and resumed without redoing finished runs; six of them again on a 2-worker Dask
+LocalCluster, bit for bit; an unreachable scheduler refused naming the key; bad keys refused; the bootstrap interval."""
 import json
 import os
+import shutil
 import signal
 import subprocess
 import time
@@ -98,26 +99,35 @@ def test_killed_campaign_resumes_without_redoing_finished_runs(local_campaign):
 
 
 def test_dask_local_cluster_gives_the_same_bits(local_campaign, tmp_path):
+    # The Dask backend makes six of the local campaign's runs again (the three slowest that perforated,
+    # the three fastest that did not: both outcomes, nearest the V50), the other ten copied as
+    # finished: 6 runs instead of 16 (issue 33's CI time), and the fit still over all 16.
     pytest.importorskip('distributed')
     out_local = local_campaign[0]
+    a = summaries(out_local)
+    assert len(a) == N_RUNS
+    yes = sorted(n for n in a if a[n]['measured']['perforated'])
+    no = sorted(n for n in a if not a[n]['measured']['perforated'])
+    assert len(yes) >= 3 and len(no) >= 3  # the range straddles the V50: the comparison covers both outcomes
+    redo = yes[:3] + no[-3:]
+    shutil.copytree(out_local / 'runs', tmp_path / 'runs')
+    for name in redo:
+        shutil.rmtree(tmp_path / 'runs' / name)
     t0 = time.time()
     r = subprocess.run(campaign_cmd(tmp_path, 'backend=dask', 'jobs=2'), cwd=str(tmp_path), capture_output=True,
                        text=True, timeout=600)
     assert r.returncode == 0, r.stdout + r.stderr
     s = json.load(open(tmp_path / 'summary.json'))
-    assert s['measured']['workers'] == 2 and s['measured']['run_now'] == N_RUNS
-    a, b = summaries(out_local), summaries(tmp_path)
-    assert sorted(a) == sorted(b) and len(a) == N_RUNS
-    perforated = 0
-    for name in a:
+    assert s['measured']['workers'] == 2 and s['measured']['run_now'] == len(redo)
+    b = summaries(tmp_path)
+    assert sorted(a) == sorted(b)
+    for name in redo:
         ma, mb = a[name]['measured'], b[name]['measured']
         assert ma['residual_velocity'] == mb['residual_velocity'], name  # bit for bit, not approx
         assert ma['projectile_velocity_end'] == mb['projectile_velocity_end'], name
         for k in ma:
             if k not in TIMING:
                 assert ma[k] == mb[k], (name, k)
-        perforated += ma['perforated']
-    assert 0 < perforated < N_RUNS  # the range straddles the V50: the comparison covers both outcomes
     assert s['measured']['V50'] == json.load(open(out_local / 'summary.json'))['measured']['V50']
     print('dask campaign: %.0f s' % (time.time() - t0))
 
