@@ -163,6 +163,7 @@ void CollisionStage::measureCrossings(const Fabric& f, Real dt, bool formNew) {
 }
 
 void CollisionStage::refit(Fabric& f, Real dt) {
+  horizon_ = dt;
   if (filter_.yarnExclude.size() != f.yarns.size())
     filter_.configure(f, params_.selfExclude,
                       params_.model == ContactModel::Gap ? semiAxes(1, params_.mcd, params_.rule).a : 1.0);
@@ -221,6 +222,26 @@ bool inside(const OBB& a, const OBB& b) {
 // of 150 steps. The contacts are the same as with a full broad phase: the narrow phase decides each
 // pair on its own, and a pair it does not measure forgets its memory as one the broad phase did not
 // list.
+// A renewed CP's skin box: its grown box with the skin on every side, stretched kSkinSteps steps
+// ahead along its mean velocity. A CP carried by the impact's waves then stays inside for several
+// steps where it left a 40 um skin every few, and the box grows only the way it moves: over the
+// default impact's 100 us, 600 CPs a step re-collided instead of 1 481 (of 9 384, each ~4 us in the
+// grid), the broad phase 5.1 s instead of 7.7; 4 steps ahead 824, 16 steps 415 CPs but more
+// candidates and no faster; an isotropic skin of 120 um 516 CPs a step but 35 600 candidates
+// (24 600) and no faster either. The contacts do not depend on the boxes (the narrow phase decides
+// each pair on its own): the same bits for any skin (Threads.BallisticSceneIsTheSameBits...).
+OBB CollisionStage::skinBox(const Fabric& f, Index e) const {
+  OBB b = grown_[e];
+  b.extent.array() += params_.skin;
+  const Index i = f.elem0[e];
+  const Vec3 ahead = (0.5 * kSkinSteps * horizon_) * (f.vel[i] + f.vel[i + 1]);
+  if (ahead.allFinite()) {
+    b.centre += 0.5 * ahead;
+    b.extent += 0.5 * (b.axes.transpose() * ahead).cwiseAbs();
+  }
+  return b;
+}
+
 void CollisionStage::broad(const Fabric& f) {
   if (pairsValid_ && skinBoxes_.size() == grown_.size()) {
     // The containment test of every CP (threads), then the CPs and yarns that left (in order).
@@ -242,10 +263,7 @@ void CollisionStage::broad(const Fabric& f) {
           if (outside_[e]) dirtyYarn_[f.elemYarn[e]] = 1;
       }
       for (Index e = 0; e < static_cast<Index>(grown_.size()); ++e)
-        if (renewed(e)) {
-          skinBoxes_[e] = grown_[e];
-          skinBoxes_[e].extent.array() += params_.skin;
-        }
+        if (renewed(e)) skinBoxes_[e] = skinBox(f, e);
       // The pairs between two CPs kept, by fixed chunks (threads) joined in order; merged with the
       // fresh ones (both sorted) on the threads.
       constexpr Index kChunk = 8192;
@@ -268,8 +286,8 @@ void CollisionStage::broad(const Fabric& f) {
     }
   }
   stats.renewed = 0;
-  skinBoxes_ = grown_;
-  for (OBB& b : skinBoxes_) b.extent.array() += params_.skin;
+  skinBoxes_.resize(grown_.size());
+  for (Index e = 0; e < static_cast<Index>(grown_.size()); ++e) skinBoxes_[e] = skinBox(f, e);
   if (broadPhase == BroadPhase::YarnTree) tree.collide(f, skinBoxes_, filter_, pairs_);
   else if (broadPhase == BroadPhase::Grid) grid.collide(f, skinBoxes_, filter_, pairs_);
   else sap.collide(f, skinBoxes_, filter_, pairs_);

@@ -200,6 +200,9 @@ class CollisionStage : public StepHook {
     return dt > 0 && params_.projectionSweepCount() > 0 ? params_.projectionMaxMove : 0.0;
   }
   void broad(const Fabric& f);
+  /// Steps of its mean velocity a renewed CP's skin box reaches ahead (skinBox).
+  static constexpr Real kSkinSteps = 8;
+  OBB skinBox(const Fabric& f, Index e) const;
   void narrow(const Fabric& f, Real dt);
   /// The persistent crossings' part of a pass: tracked before the broad phase (trackCrossings),
   /// formed from the general contacts and measured after the narrow phase (measureCrossings).
@@ -263,6 +266,7 @@ class CollisionStage : public StepHook {
   std::vector<Real> grow_, flatBefore_, widest_;  // widest_: per node, the major semi-axis (model Gap)
   ChordFrames chords_;                           // narrow (model Gap): each CP's unit chord and length
   std::vector<Real> speed_;                      // refit: each CP's faster node's speed [m/s] (boxes, narrow)
+  Real horizon_ = 0;                             // refit: the step its boxes were grown for [s] (0: static)
   Vec3Array lastPos_;                            // refit: each node's position at the last pass [m]
   std::vector<Real> travelled_, odometer_;       // per node the path travelled since the start, per CP its nodes' sum [m]
   std::vector<Real> widestAtMcd_;                // narrow (model Gap): each CP's widest semi-axis at the MCD [m]
