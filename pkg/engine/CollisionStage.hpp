@@ -1,16 +1,21 @@
-// The collision stage of a step, top to bottom (docs/collisions.md):
-//   refit     section frames and the OBB of every CP (bound functor), grown by its motion in the step
-//   broad     candidate CP pairs (YarnTreeCollider, or the SweepAndPrune reference)
-//   narrow    static SAT contact, else the moving SAT's first contact within the step (geometry functor)
-//   respond   flatten sections (passes; pressed by yarns or, model Gap, by a body), impulses where
-//             flattening cannot absorb the approach, then
-//             positional correction of residual overlaps (law); or the alternatives of
-//             ContactParams::response / flattening: penalty forces on the overlaps, sections that
-//             never flatten, section springs (law/NormalForces; docs/collisions.md)
-// Rigid bodies (YADE's projectile, clamps: shape/RigidBody) join the same step: a broad phase of their
-// parts against the CPs (BodyCollider), the body geometry functor (geom/BodyContact), and their rows
-// in the same impulse solve; after the fabric's drift the bodies drift with their new velocities.
-// It runs between the kick and the drift (ChainDynamics::StepHook) on x_n and v_{n+1/2}.
+// The collision stage of a step, top to bottom (docs/collisions.md), each stage in its own file:
+//   refit      section frames and each CP's OBB, grown by its motion in the step (StageBroad.cpp)
+//   crossings  the persistent crossings tracked by a Newton step from where they were, handed back
+//              where they break, part, turn, kink or slide (StageCrossings.cpp, CrossingContacts)
+//   broad      candidate CP pairs of the CPs that left their skin boxes, the crossings' own chord
+//              pairs left out (StageBroad.cpp: grid, OBB tree or sweep and prune)
+//   narrow     each candidate pair's contact: model Gap (the default) the gap function of the two
+//              chains and its stencil (geom/GapFunction), model Paper the SAT (StagePairs.cpp);
+//              the crossings measured and formed; each body part against its CPs (StageBodies.cpp)
+//   respond    the sections flattened (StageSections.cpp), then the impulse rows of every contact
+//              that can close within the step, warm-started and swept to solver_tolerance
+//              (law/ImpulseLaw), the bodies' rows in the same solve; or the alternatives of
+//              ContactParams::response / flattening (penalty forces, no flattening, section springs)
+//   relax      after the drift, the position projection of what is left (afterDrift)
+// The stage's memory (crossings, pairs' measure memory, carried contacts) travels in state files and
+// snapshots (StageMemory.cpp). Rigid bodies (YADE's projectile, clamps: shape/RigidBody) join the
+// same step and drift with their new velocities. The stage runs between the kick and the drift
+// (ChainDynamics::StepHook) on x_n and v_{n+1/2}.
 #pragma once
 #include "collider/BodyCollider.hpp"
 #include "collider/GridCollider.hpp"
