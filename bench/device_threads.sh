@@ -79,16 +79,18 @@ measure() {
   local t0=$SECONDS
   if [ "$mode" = quick ]; then
     [ "${ONLY:-tension}" = tension ] && bench tension_20 scene=tension yarns=20 steps=40   # 3 200 CPs: two chunks
-    [ "${ONLY:-impact}" = impact ] && bench impact_5k side=0.0381 t_end=3e-6         # 5 512 CPs
+    [ "${ONLY:-impact}" = impact ] && bench impact_5k side=0.0381 t_end=3e-6 sweep_order=blocked   # 5 512 CPs
   else
-    # Step counts: 6-25 s on one thread each on the developers' machine (one thread: tension 100 at
-    # 4.4e6 CP-steps/s, 200 at 3.8e6; the ply at 1e5 CPs 2.0e6, at 1e6 1.3e6), so 0.5-2 s on 16 threads;
-    # there all of it took an estimated 5-6 min, a quarter of it building the 1e6 ply five times.
-    [ "${ONLY:-tension}" = tension ] && { bench tension_100 scene=tension yarns=100 steps=800
+    # Step counts: 10-25 s on one thread each on the developers' machine (one thread: tension 100 at
+    # 4.2e6 CP-steps/s, 200 at 3.8e6; the ply at 1e4 CPs 0.8e6, at 1e5 2.0e6, at 1e6 1.3e6), so about
+    # 1-2 s on 16 threads; all of it an estimated 5.5-6 min at that machine's speed, a third of it
+    # building the 1e6 ply five times. The ply runs in sweep_order=blocked (bench_ballistic's order
+    # with threads >= 2: the sequential sweeps are serial), the tension scene in its default order.
+    [ "${ONLY:-tension}" = tension ] && { bench tension_100 scene=tension yarns=100 steps=500
                                           bench tension_200 scene=tension yarns=200 steps=250; }
-    [ "${ONLY:-impact}" = impact ] && { bench impact_1e4 side=0.0508                # the default impact, 1500 steps (100 us)
-                                        bench impact_1e5 side=0.166 steps=300 warmup=2   # 99 012 CPs
-                                        bench impact_1e6 side=0.52 steps=30 warmup=2; }  # 970 224 CPs, 2.9 GB, 22 s to build
+    [ "${ONLY:-impact}" = impact ] && { bench impact_1e4 side=0.0508 sweep_order=blocked                # the default impact, 1496 steps (100 us)
+                                        bench impact_1e5 side=0.166 steps=300 warmup=2 sweep_order=blocked   # 99 012 CPs
+                                        bench impact_1e6 side=0.52 steps=30 warmup=2 sweep_order=blocked; }  # 970 224 CPs, 2.9 GB, 22 s to build
   fi
   table | tee "$dir/table.txt"
   echo "device_threads: $mode took $((SECONDS - t0)) s; same bits at every count: $([ $failed -eq 0 ] && echo yes || echo NO)" \
