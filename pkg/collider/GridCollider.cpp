@@ -6,6 +6,47 @@
 
 namespace woven {
 
+void GridCollider::CellTable::clear() {
+  std::fill(keys_.begin(), keys_.end(), kFree);
+  for (std::vector<Index>& c : cells_) c.clear();
+  used_ = 0;
+}
+
+void GridCollider::CellTable::grow() {
+  std::vector<std::uint64_t> keys(std::max<std::size_t>(1024, 2 * keys_.size()), kFree);
+  std::vector<std::vector<Index>> cells(keys.size());
+  keys.swap(keys_), cells.swap(cells_);
+  mask_ = keys_.size() - 1;
+  shift_ = 64 - __builtin_ctzll(keys_.size());
+  for (std::size_t k = 0; k < keys.size(); ++k)
+    if (keys[k] != kFree) {
+      std::size_t s = slot(keys[k]);
+      while (keys_[s] != kFree) s = (s + 1) & mask_;
+      keys_[s] = keys[k], cells_[s] = std::move(cells[k]);
+    }
+}
+
+std::vector<Index>& GridCollider::CellTable::at(std::uint64_t key) {
+  if (2 * (used_ + 1) > keys_.size()) grow();
+  std::size_t s = slot(key);
+  while (keys_[s] != key) {
+    if (keys_[s] == kFree) {
+      keys_[s] = key, ++used_;
+      break;
+    }
+    s = (s + 1) & mask_;
+  }
+  return cells_[s];
+}
+
+const std::vector<Index>* GridCollider::CellTable::find(std::uint64_t key) const {
+  if (keys_.empty()) return nullptr;
+  for (std::size_t s = slot(key);; s = (s + 1) & mask_) {
+    if (keys_[s] == key) return &cells_[s];
+    if (keys_[s] == kFree) return nullptr;
+  }
+}
+
 void GridCollider::aabb(const std::vector<OBB>& boxes, Index i) {
   const Vec3 half = boxes[i].axes.cwiseAbs() * boxes[i].extent;
   lo_[i] = boxes[i].centre - half, hi_[i] = boxes[i].centre + half;
@@ -20,7 +61,7 @@ void GridCollider::insert(Index i) {
   cellLo_[i] = cellOf(lo_[i]), cellHi_[i] = cellOf(hi_[i]);
   for (std::int64_t x = cellLo_[i].x; x <= cellHi_[i].x; ++x)
     for (std::int64_t y = cellLo_[i].y; y <= cellHi_[i].y; ++y)
-      for (std::int64_t z = cellLo_[i].z; z <= cellHi_[i].z; ++z) cells_[key(x, y, z)].push_back(i);
+      for (std::int64_t z = cellLo_[i].z; z <= cellHi_[i].z; ++z) cells_.at(key(x, y, z)).push_back(i);
   held_[i] = 1;
 }
 
@@ -28,7 +69,7 @@ void GridCollider::remove(Index i) {
   for (std::int64_t x = cellLo_[i].x; x <= cellHi_[i].x; ++x)
     for (std::int64_t y = cellLo_[i].y; y <= cellHi_[i].y; ++y)
       for (std::int64_t z = cellLo_[i].z; z <= cellHi_[i].z; ++z) {
-        std::vector<Index>& in = cells_[key(x, y, z)];
+        std::vector<Index>& in = cells_.at(key(x, y, z));
         const auto it = std::find(in.begin(), in.end(), i);
         if (it != in.end()) *it = in.back(), in.pop_back();
       }
@@ -115,9 +156,9 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
       for (std::int64_t x = cellLo_[i].x; x <= cellHi_[i].x; ++x)
         for (std::int64_t y = cellLo_[i].y; y <= cellHi_[i].y; ++y)
           for (std::int64_t z = cellLo_[i].z; z <= cellHi_[i].z; ++z) {
-            const auto cell = cells_.find(key(x, y, z));
-            if (cell == cells_.end()) continue;
-            for (const Index j : cell->second) {
+            const std::vector<Index>* cell = cells_.find(key(x, y, z));
+            if (!cell) continue;
+            for (const Index j : *cell) {
               if (j == i || (j < i && flagged(j))) continue;
               if ((hi_[i].array() < lo_[j].array()).any() || (hi_[j].array() < lo_[i].array()).any()) continue;
               // The pair belongs to the cell of its AABB intersection's lowest corner: once only.

@@ -19,7 +19,7 @@
 #pragma once
 #include "collider/CandidatePairs.hpp"
 #include <cstdint>
-#include <unordered_map>
+#include <vector>
 
 namespace woven {
 
@@ -55,7 +55,24 @@ class GridCollider {
   std::vector<Vec3> lo_, hi_;              // AABBs as the grid holds them
   std::vector<Cell> cellLo_, cellHi_;      // each CP's range of cells (lowest and highest per axis)
   std::vector<std::uint8_t> held_;         // per CP: in the grid (alive at its last entry)
-  std::unordered_map<std::uint64_t, std::vector<Index>> cells_;
+  // The occupied cells by key: open addressing with linear probing in a power-of-two table at most
+  // half full, each cell's CPs in a vector of its own. A std::unordered_map's lookups (a node per
+  // cell, its hash modulo a prime) were most of a partial call's time.
+  class CellTable {
+   public:
+    void clear();                                          // every cell gone (their storage kept)
+    std::vector<Index>& at(std::uint64_t key);             // the cell, added if new
+    const std::vector<Index>* find(std::uint64_t key) const;  // the cell, or null
+   private:
+    static constexpr std::uint64_t kFree = ~std::uint64_t(0);  // no key has its top bit set
+    std::size_t slot(std::uint64_t key) const { return (key * 0x9E3779B97F4A7C15ull) >> shift_ & mask_; }
+    void grow();
+    std::vector<std::uint64_t> keys_;
+    std::vector<std::vector<Index>> cells_;
+    std::size_t used_ = 0, mask_ = 0;
+    int shift_ = 64;
+  };
+  CellTable cells_;
   Real inverse_ = 0;                       // 1 / cellSize
   std::vector<Real> chunkSide_;            // largest AABB side of each fixed chunk of CPs
   std::vector<std::vector<CPPair>> chunkPairs_;  // pairs of each fixed chunk of CPs
