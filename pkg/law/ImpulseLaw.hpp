@@ -182,6 +182,8 @@ class ImpulseLaw {
   std::vector<std::uint8_t> marked_;
   // The serial tail's active set (solve): each node's tail rows (CSR) and a bit per tail row to update.
   std::vector<Index> nodeStart_, nodeRows_, fill_;
+  std::vector<Index> wordStart_, words_;  // per node its tail rows' words of the bit sets (CSR) ...
+  std::vector<std::uint64_t> masks_;      // ... and each word's rows
   std::vector<std::uint64_t> dirty_, next_;  // this sweep's rows to update (after the one updated), the next sweep's
   long skipped_ = 0;  // row updates the active set skipped in the last solve
   Real solverTol_ = 0;  // the solve's tolerance on a row's miss [m/s] (resolve)
