@@ -1,19 +1,22 @@
 # V50 against the number of plies, and against friction for one ply, from V50 campaigns of
 # scripts/campaign.py; Cunniff's dimensionless chart (woven.cunniff).
 #   yade -n -x scripts/v50_plies.py [campaigns=out/v50p/p1,out/v50p/p2,out/v50p/p4,out/v50p/p8]
-#                                   [friction=out/v50p/p1_f02,out/v50p/p1_f04] [out=DIR]
+#                                   [friction=out/v50p/p1_f02,out/v50p/p1_f04] [beside=OTHER/v50_plies.csv] [out=DIR]
 # Each folder is a campaign's `out` (summary.json, campaign.csv, runs/*/summary.json). The ply
 # campaigns must be one scene but for `plies`; the friction campaigns must be the 1-ply campaign's scene
 # but for `friction` and `body_friction`. A campaign without a Lambert-Jonas fit is listed with its
 # runs and bracket and no V50.
+# `beside`: an earlier output's v50_plies.csv (another patch size, say), drawn beside on both charts.
 # Output (out/v50_plies/): v50_plies.csv (one row per campaign: plies, friction, areal density, V50
 # and its interval, bracket, Cunniff's axes, runs, CPU), v50_plies.png (V50 against plies and areal
-# density; Cunniff's axes; V50 against friction), summary.json (U*, the rows, checks).
+# density; Cunniff's axes with a power law y = c x^b fitted through each family; V50 against
+# friction), summary.json (U*, the rows, the fits, checks).
 import csv
 import json
 import os
 import sys
 
+import numpy as np
 import woven
 import woven.cunniff as cunniff
 from woven.output import dry_run_stop, csv_field as fmt, out_dir, savefig, write_csv, write_summary
@@ -25,6 +28,8 @@ p = read_params({
                   'campaign folders (scripts/campaign.py out=), one per ply count, comma-separated; one scene but for plies'),
     'friction': ('', '', "campaign folders of one ply at other friction / body_friction, comma-separated; the 1-ply "
                  "campaign's scene but for those keys (empty: none)"),
+    'beside': ('', '', 'a v50_plies.csv of another family of ply campaigns (e.g. another patch size) drawn beside '
+               'this one on the V50 and Cunniff charts, its Cunniff fit too (empty: none)'),
     'out': ('', '', 'output folder (default out/v50_plies)'),
 })
 # A collector: its input is the folders it reads, which a dry run (WOVEN_DRY_RUN=1) does not need.
@@ -32,6 +37,25 @@ dry_run_stop('v50_plies')
 
 # Keys that may differ between campaigns of one family (V and seed are the runs' own; out is the folder).
 RUN_KEYS = ('V', 'seed', 'out')
+
+
+def load_beside(path):
+    """The ply rows (family 'plies', with a V50) of an earlier v50_plies.csv, as floats."""
+    try:
+        with open(path) as f:
+            rows = [r for r in csv.DictReader(f) if r.get('family') == 'plies' and r.get('V50_m_s')]
+        out = [{k: float(r[k]) for k in ('plies', 'side_m', 'V50_m_s', 'cunniff_x', 'cunniff_y')} for r in rows]
+        for k in ('fastest_stop_m_s', 'slowest_perforation_m_s'):
+            for o, r in zip(out, rows):
+                o[k] = float(r[k]) if r.get(k) else None
+    except (OSError, ValueError, KeyError) as ex:
+        raise ValueError('beside = %r is invalid: allowed a v50_plies.csv of this script (%s)' % (path, ex))
+    if len(out) < 1:
+        raise ValueError('beside = %r is invalid: allowed a v50_plies.csv with ply rows that have a V50' % path)
+    return out
+
+
+beside = load_beside(p.beside) if p.beside else []
 
 
 def folders(key):
@@ -173,6 +197,19 @@ checks['energy_balance'] = {'value': worst, 'limit': limit, 'passed': worst <= l
                             'what': 'largest energy-balance error of any run / its initial kinetic energy'}
 status = 'ok' if all(c['passed'] for c in checks.values()) else 'failed'
 
+
+def fit_of(rows):
+    """Cunniff's power law y = c x^b through a family's points (woven.cunniff.power_fit), or None."""
+    pts = [(r['cunniff_x'], r['cunniff_y']) for r in rows if r['cunniff_y']]
+    if len({x for x, _ in pts}) < 2:
+        return None
+    c, b, rms = cunniff.power_fit([x for x, _ in pts], [y for _, y in pts])
+    return {'c': c, 'b': b, 'rms_log': rms, 'points': len(pts)}
+
+
+fit = fit_of(ply_rows)
+fit_beside = fit_of(beside)
+
 import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt
@@ -203,18 +240,29 @@ errbars(ax, [r['plies'] for r in ply_rows], ply_rows, 'C0', 'V50, Lambert-Jonas 
 ax.axhspan(90, 100, xmin=0, xmax=0.08, color='g', alpha=0.25, label='1 ply, 50.8 mm, experiment: 90-100 m/s')
 ax.set_xlabel('plies')
 ax.set_ylabel('V50 [m/s]')
-ax.set_xticks([r['plies'] for r in ply_rows])
+if beside:
+    errbars(ax, [r['plies'] for r in beside], beside, 'C7',
+            'beside: %.1f mm plies (%s)' % (1e3 * beside[0]['side_m'], os.path.basename(str(p.beside))))
+ax.set_xticks(sorted({r['plies'] for r in ply_rows + beside}))
 ax.set_title('KM2 706, %s, %.1f mm plies' % (proj['shape'].upper(), 1e3 * base['side']), fontsize=10)
 top = ax.secondary_xaxis('top', functions=(lambda n: n * ply_areal, lambda a: a / ply_areal))
 top.set_xlabel('areal density [kg/m$^2$]')
-ax.legend(fontsize=7, loc='upper left')
+ax.legend(fontsize=7, loc='lower right')
 ax.grid(alpha=0.3)
 
 ax = axs[1]
 pts = [r for r in ply_rows if r['cunniff_y'] is not None]
-ax.plot([r['cunniff_x'] for r in pts], [r['cunniff_y'] for r in pts], 'o-', color='C0', label='this model')
-for r in pts:
-    ax.annotate('%d' % r['plies'], (r['cunniff_x'], r['cunniff_y']), textcoords='offset points', xytext=(4, -10), fontsize=8)
+for rows, f, color, what in ((pts, fit, 'C0', '%.1f mm' % (1e3 * base['side'])),
+                             (beside, fit_beside, 'C7', 'beside, %.1f mm' % (1e3 * beside[0]['side_m']) if beside else '')):
+    if not rows:
+        continue
+    ax.plot([r['cunniff_x'] for r in rows], [r['cunniff_y'] for r in rows], 'o', color=color, label=what)
+    for r in rows:
+        ax.annotate('%d' % r['plies'], (r['cunniff_x'], r['cunniff_y']), textcoords='offset points', xytext=(4, -10), fontsize=8)
+    if f:
+        xs = np.linspace(0.5 * min(r['cunniff_x'] for r in rows), 1.1 * max(r['cunniff_x'] for r in rows), 60)
+        ax.plot(xs, f['c'] * xs ** f['b'], '--', color=color, lw=1,
+                label=r'fit $y = %.3f\,x^{%.3f}$ (rms %.1f %%)' % (f['c'], f['b'], 100 * f['rms_log']))
 ax.set_xlabel(r'$A_d A_p / m_p$')
 ax.set_ylabel(r'$V_{50} / U^{*1/3}$')
 ax.set_title(r"Cunniff's axes: $U^{*1/3}$ = %.0f m/s" % us ** (1 / 3.), fontsize=10)
@@ -259,12 +307,15 @@ measured = {'plies': ply_rows, 'friction': fric_rows, 'U_star': us, 'U_star_cbrt
             'yarn': {'E': E, 'rho': rho, 'failure_strain': eps_f, 'strength': sigma_f},
             'ply_areal_density': ply_areal, 'presented_area': area, 'projectile_mass': mass,
             'cunniff_x_per_ply': ply_areal * area / mass,
+            'cunniff_fit': fit, 'cunniff_fit_beside': fit_beside,
             'cpu_seconds': sum(r['cpu_seconds'] for r in ply_rows) +
                            sum(r['cpu_seconds'] for r in fric_rows if r['campaign'] not in [q['campaign'] for q in ply_rows])}
 reference = {'V50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-reference.md (Nilakantan et al.; 50.8 mm)
              'cunniff_x_per_ply_km2_706_1.1g': 0.0040,          # physics-reference.md
              'friction_raises_V50_by': 0.10}                     # Rao et al. 2009, yarn-level FE
-units = {'U_star': 'm^3/s^3', 'U_star_cbrt': 'm/s', 'yarn': 'Pa, kg/m^3, -, Pa', 'ply_areal_density': 'kg/m^2',
+units = {'cunniff_fit': 'y = c x^b on Cunniff\'s axes (both dimensionless); rms_log: rms of log(y / fit)',
+         'cunniff_fit_beside': 'the same for the beside CSV\'s rows',
+         'U_star': 'm^3/s^3', 'U_star_cbrt': 'm/s', 'yarn': 'Pa, kg/m^3, -, Pa', 'ply_areal_density': 'kg/m^2',
          'presented_area': 'm^2', 'projectile_mass': 'kg', 'cpu_seconds': 's',
          'plies': 'rows of v50_plies.csv (units in the column names)', 'friction': 'rows of v50_plies.csv'}
 write_summary(d, 'v50_plies', p, measured, reference, units, status, checks)
@@ -273,6 +324,10 @@ for r in ply_rows + fric_rows:
           % (r['plies'], r['friction'], r['body_friction'], fmt(r['V50_m_s']),
              '%s-%s' % (fmt(r['V50_lo_m_s']), fmt(r['V50_hi_m_s'])), fmt(r['fastest_stop_m_s']),
              fmt(r['slowest_perforation_m_s']), r['cunniff_x'], fmt(r['cunniff_y'])))
+for name, f in (('', fit), (' beside', fit_beside)):
+    if f:
+        print('v50_plies: Cunniff fit%s: V50 / U*^(1/3) = %.4f (A_d A_p / m_p)^%.4f over %d packs, rms %.1f %%'
+              % (name, f['c'], f['b'], f['points'], 100 * f['rms_log']))
 print('v50_plies: %s; U*^(1/3) = %.1f m/s -> %s' % (status, us ** (1 / 3.), d))
 if status != 'ok':
     sys.exit(1)

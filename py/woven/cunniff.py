@@ -12,6 +12,7 @@ mass of projectile. SI units throughout.
     from woven import cunniff
     us = cunniff.u_star(4.5e9, 0.05, 1440.0, 90e9)          # 6.18e8 m^3/s^3 (KM2 as woven's preset)
     x, y = cunniff.axes(100.0, 0.1804, 2.4524e-5, 1.0758e-3, us)
+    c, b, rms = cunniff.power_fit([x1, x2, x4], [y1, y2, y4])   # y = c x^b through a family of packs
 """
 import math
 
@@ -49,3 +50,26 @@ def axes(v50, areal_density, area, mass, ustar):
         if not (math.isfinite(v) and v > 0):
             raise ValueError('%s = %r is invalid: allowed a finite value > 0' % (name, v))
     return areal_density * area / mass, v50 / ustar ** (1.0 / 3.0)
+
+
+def power_fit(xs, ys):
+    """The power law y = c x^b through Cunniff's points of a family of packs (least squares on log y
+    against log x): (c, b, rms), rms the root-mean-square of log(y / (c x^b)), about the relative misfit.
+    Two points give the line through both (rms 0); needs at least two distinct x, every x and y > 0."""
+    pts = [(float(x), float(y)) for x, y in zip(xs, ys)]
+    if len(pts) != len(xs) or len(pts) != len(ys):
+        raise ValueError('ys has %d values for %d xs: allowed one y per x' % (len(ys), len(xs)))
+    for name, vals in (('xs', [x for x, _ in pts]), ('ys', [y for _, y in pts])):
+        if not all(math.isfinite(v) and v > 0 for v in vals):
+            raise ValueError('%s = %r is invalid: allowed finite values > 0' % (name, vals))
+    lx = [math.log(x) for x, _ in pts]
+    ly = [math.log(y) for _, y in pts]
+    n = len(pts)
+    mx, my = sum(lx) / max(n, 1), sum(ly) / max(n, 1)
+    sxx = sum((a - mx) ** 2 for a in lx)
+    if n < 2 or not sxx > 0:
+        raise ValueError('xs = %r is invalid: allowed at least two distinct values' % [x for x, _ in pts])
+    b = sum((a - mx) * (c - my) for a, c in zip(lx, ly)) / sxx
+    c = math.exp(my - b * mx)
+    rms = math.sqrt(sum((ly_k - (math.log(c) + b * lx_k)) ** 2 for lx_k, ly_k in zip(lx, ly)) / n)
+    return c, b, rms

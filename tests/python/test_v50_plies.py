@@ -39,6 +39,26 @@ def test_km2_rcc_against_the_reference():
     assert x == pytest.approx(0.0040, rel=0.01)
 
 
+def test_power_fit_against_exact_points():
+    # Points on y = 0.5 x^0.6 exactly: the fit returns c and b to rounding, rms 0.
+    xs = [0.004, 0.008, 0.016, 0.032]
+    c, b, rms = cunniff.power_fit(xs, [0.5 * x ** 0.6 for x in xs])
+    assert c == pytest.approx(0.5, rel=1e-12) and b == pytest.approx(0.6, rel=1e-12) and rms < 1e-12
+    # Two points: the line through both in log-log, b = log(y2 / y1) / log(x2 / x1) = log 1.5 / log 2.
+    c, b, rms = cunniff.power_fit([0.01, 0.02], [0.1, 0.15])
+    assert b == pytest.approx(math.log(1.5) / math.log(2), rel=1e-12)
+    assert c * 0.01 ** b == pytest.approx(0.1, rel=1e-12) and rms < 1e-12
+    # Three points off a line: least squares in logs, by hand (x = 1, e, e^2; log y = 0, 1, 1):
+    # slope 0.5, intercept 1/6, residuals -1/6, 1/3, -1/6: rms sqrt((1/36 + 1/9 + 1/36) / 3) = sqrt(1/18).
+    c, b, rms = cunniff.power_fit([1.0, math.e, math.e ** 2], [1.0, math.e, math.e])
+    assert b == pytest.approx(0.5, rel=1e-12) and math.log(c) == pytest.approx(1 / 6, rel=1e-12)
+    assert rms == pytest.approx(math.sqrt(1 / 18), rel=1e-12)
+    for xs, ys, key in (([0.01], [0.1], 'xs'), ([0.01, 0.01], [0.1, 0.2], 'xs'), ([0.01, -0.02], [0.1, 0.2], 'xs'),
+                        ([0.01, 0.02], [0.1, 0.0], 'ys'), ([0.01, 0.02], [0.1], 'ys')):
+        with pytest.raises(ValueError, match=key):
+            cunniff.power_fit(xs, ys)
+
+
 def test_bad_input_names_the_key():
     for call, key in ((lambda: cunniff.u_star(-1.0, 0.05, 1440.0, 90e9), 'strength'),
                       (lambda: cunniff.u_star(4.5e9, 0.05, float('nan'), 90e9), 'density'),
@@ -96,6 +116,19 @@ def test_table_arithmetic(campaigns):
     assert float(rows[1]['cunniff_x']) == pytest.approx(2 * float(rows[0]['cunniff_x']), rel=1e-9)
     assert s['checks']['v50_rises_with_plies']['passed']
     assert os.path.getsize(out / 'chart' / 'v50_plies.png') > 10000
+    # Cunniff's power law through the two packs: the line through both points in log-log.
+    (x1, y1), (x2, y2) = [(r['cunniff_x'], r['cunniff_y']) for r in m['plies']]  # unrounded, as fitted
+    fit = m['cunniff_fit']
+    assert fit['points'] == 2 and fit['b'] == pytest.approx(math.log(y2 / y1) / math.log(x2 / x1), rel=1e-9)
+    assert fit['c'] * x1 ** fit['b'] == pytest.approx(y1, rel=1e-9) and fit['rms_log'] < 1e-9
+    assert m['cunniff_fit_beside'] is None
+    # The chart's own CSV beside it: the same points (rounded to the CSV's digits), the same fit.
+    rc, log = yade('v50_plies.py', 'campaigns=%s,%s' % (out / 'p1', out / 'p2'), 'out=%s' % (out / 'beside'),
+                   'beside=%s' % (out / 'chart' / 'v50_plies.csv'), cwd=out)
+    assert rc == 0, log[-2000:]
+    m2 = json.load(open(out / 'beside' / 'summary.json'))['measured']
+    assert m2['cunniff_fit_beside']['b'] == pytest.approx(fit['b'], rel=1e-4)
+    assert m2['cunniff_fit_beside']['c'] == pytest.approx(fit['c'], rel=1e-4)
 
 
 def test_refusals(script_server, campaigns):
@@ -108,3 +141,7 @@ def test_refusals(script_server, campaigns):
     assert rc != 0 and 'friction' in log and 'plies' in log
     rc, log, _ = run_refused(script_server, 'v50_plies.py', out / 'bad3', 'campaigns=%s,%s' % (out / 'p1', out / 'p1'))
     assert rc != 0 and 'one campaign per ply count' in log
+    # A beside file that is not a v50_plies.csv: refused naming the key.
+    rc, log, _ = run_refused(script_server, 'v50_plies.py', out / 'bad4', 'campaigns=%s' % (out / 'p1'),
+                             'beside=%s' % (out / 'p1' / 'summary.json'))
+    assert rc != 0 and 'beside' in log
