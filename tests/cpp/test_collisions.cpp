@@ -150,6 +150,51 @@ TEST(Collider, TreeSweepAndPruneGridAndBruteForceGiveTheSamePairs) {
   EXPECT_GT(cs.tree.stats.rebuiltNodes, rebuiltFirst);  // the bent yarns degraded some nodes
 }
 
+// The grid kept between calls (CollisionStage::broad's partial phases): rounds of a few CPs whose
+// boxes moved and grew, each call moving only those in the grid's cells, must list exactly the
+// brute-force pairs of a moved CP on the boxes of that round. A 16 x 16 ply in cells of 0.3 mm fills
+// more than 8 000 of them, so the cells' table grows (rehashes) five times while it is filled.
+// Oracle: every pair's OBB test on the same boxes.
+TEST(Collider, GridKeptBetweenCallsListsThePairsOfTheCPsThatMoved) {
+  WeaveParams p = km2_706();
+  p.nx = 16, p.ny = 16;
+  Weave w = buildWeave(p);
+  FabricEngine eng(std::move(w.fabric));
+  eng.enableCollisions(ContactParams());
+  CollisionStage& cs = *eng.collisions();
+  const Fabric& f = eng.fabric();
+  std::vector<CPPair> all;
+  cs.candidatePairs(eng.fabric(), BroadPhase::Grid, all);  // the stage's refit: its bounds
+  std::vector<OBB> b = cs.bounds();
+  PairFilter filter;
+  filter.configure(f, 1, semiAxes(1, ContactParams().mcd, ContactParams().rule).a);
+  GridCollider g;
+  std::vector<CPPair> first;
+  g.collide(f, b, filter, first);
+  ASSERT_EQ(g.rebuilds, 1);
+  std::mt19937 rng(5);
+  std::normal_distribution<Real> G(0, 1);
+  std::bernoulli_distribution B(0.1);
+  for (int round = 0; round < 6; ++round) {
+    std::vector<std::uint8_t> moved(f.nElems(), 0);
+    for (Index e = 0; e < f.nElems(); ++e)
+      if (B(rng)) {  // moved ~25 um (cells of 0.3 mm), grown by as much: it still holds its CP's axis
+        moved[e] = 1;
+        const Vec3 d = 1.5e-5 * Vec3(G(rng), G(rng), G(rng));
+        b[e].centre += d;
+        b[e].extent.array() += d.norm();
+      }
+    std::vector<CPPair> part, expect;
+    g.collide(f, b, filter, part, &moved);
+    for (Index i = 0; i < f.nElems(); ++i)
+      for (Index j = i + 1; j < f.nElems(); ++j)
+        if ((moved[i] || moved[j]) && !filter.excluded(f, i, j) && obbOverlap(b[i], b[j])) expect.push_back({i, j});
+    ASSERT_GT(expect.size(), 100u) << "round " << round;
+    EXPECT_EQ(part, expect) << "round " << round;
+  }
+  EXPECT_EQ(g.rebuilds, 1);  // every later call moved its CPs in the kept grid
+}
+
 // A pair the broad phase keeps listing (a skin of 2 mm) while the narrow phase stops measuring it
 // (its axes 1 mm apart) must come back as a new pair: here it comes back from the other side, and
 // the remembered normal of the first contact would read that as the axes passed through each other
