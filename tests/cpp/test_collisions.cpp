@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <random>
 
 using namespace woven;
@@ -43,6 +44,33 @@ Fabric cpPair(Real gap, Real r = 1e-4, Real l0 = 1e-3) {
   f.addYarn(line(0, 0, 1, l0), km2Material(), roundSection(r));
   f.addYarn(line(0, gap, 1, l0), km2Material(), roundSection(r));
   return f;
+}
+
+/// A KM2 706 ply of n x n yarns with the default contact settings (the colliders' tests).
+std::unique_ptr<FabricEngine> plyWithCollisions(int n) {
+  WeaveParams p = km2_706();
+  p.nx = p.ny = n;
+  auto eng = std::make_unique<FabricEngine>(buildWeave(p).fabric);
+  eng->enableCollisions(ContactParams());
+  return eng;
+}
+
+/// The colliders' oracle: every pair i < j that `keep` selects and the gap model's filter keeps
+/// (same-yarn pairs excluded over the widest flattened section, CandidatePairs.hpp) whose boxes
+/// overlap, in order.
+template <class Keep>
+std::vector<CPPair> bruteForcePairs(const Fabric& f, const std::vector<OBB>& b, const PairFilter& filter, Keep keep) {
+  std::vector<CPPair> out;
+  for (Index i = 0; i < f.nElems(); ++i)
+    for (Index j = i + 1; j < f.nElems(); ++j)
+      if (keep(i, j) && !filter.excluded(f, i, j) && obbOverlap(b[i], b[j])) out.push_back({i, j});
+  return out;
+}
+
+PairFilter gapModelFilter(const Fabric& f) {
+  PairFilter filter;
+  filter.configure(f, 1, semiAxes(1, ContactParams().mcd, ContactParams().rule).a);
+  return filter;
 }
 
 Real kinetic(const Fabric& f) {
@@ -91,13 +119,9 @@ TEST(CPBound, EnclosesTheEllipticCylinderAndTouchesIt) {
 }
 
 TEST(Collider, TreeSweepAndPruneGridAndBruteForceGiveTheSamePairs) {
-  WeaveParams p = km2_706();
-  p.nx = 4, p.ny = 4;
-  Weave w = buildWeave(p);
-  FabricEngine eng(std::move(w.fabric));
-  eng.enableCollisions(ContactParams());
-  CollisionStage& cs = *eng.collisions();
-  Fabric& f = eng.fabric();
+  const auto eng = plyWithCollisions(4);
+  CollisionStage& cs = *eng->collisions();
+  Fabric& f = eng->fabric();
   std::mt19937 rng(11);
   std::normal_distribution<Real> G(0, 1);
   long rebuiltFirst = 0;
@@ -112,14 +136,9 @@ TEST(Collider, TreeSweepAndPruneGridAndBruteForceGiveTheSamePairs) {
     cs.candidatePairs(f, BroadPhase::SweepAndPrune, sap);
     cs.candidatePairs(f, BroadPhase::Grid, grid);
     // Brute force over all pairs with the same box test.
-    std::vector<CPPair> brute;
-    PairFilter filter;
-    // The gap model excludes same-yarn pairs over the widest flattened section (CandidatePairs.hpp).
-    filter.configure(f, 1, semiAxes(1, ContactParams().mcd, ContactParams().rule).a);
+    const PairFilter filter = gapModelFilter(f);
     const std::vector<OBB>& b = cs.bounds();
-    for (Index i = 0; i < f.nElems(); ++i)
-      for (Index j = i + 1; j < f.nElems(); ++j)
-        if (!filter.excluded(f, i, j) && obbOverlap(b[i], b[j])) brute.push_back({i, j});
+    const std::vector<CPPair> brute = bruteForcePairs(f, b, filter, [](Index, Index) { return true; });
     ASSERT_GT(brute.size(), 100u) << "trial " << trial;
     EXPECT_EQ(tree, brute) << "trial " << trial;
     EXPECT_EQ(sap, brute) << "trial " << trial;
@@ -156,18 +175,13 @@ TEST(Collider, TreeSweepAndPruneGridAndBruteForceGiveTheSamePairs) {
 // more than 8 000 of them, so the cells' table grows (rehashes) five times while it is filled.
 // Oracle: every pair's OBB test on the same boxes.
 TEST(Collider, GridKeptBetweenCallsListsThePairsOfTheCPsThatMoved) {
-  WeaveParams p = km2_706();
-  p.nx = 16, p.ny = 16;
-  Weave w = buildWeave(p);
-  FabricEngine eng(std::move(w.fabric));
-  eng.enableCollisions(ContactParams());
-  CollisionStage& cs = *eng.collisions();
-  const Fabric& f = eng.fabric();
+  const auto eng = plyWithCollisions(16);
+  CollisionStage& cs = *eng->collisions();
+  const Fabric& f = eng->fabric();
   std::vector<CPPair> all;
-  cs.candidatePairs(eng.fabric(), BroadPhase::Grid, all);  // the stage's refit: its bounds
+  cs.candidatePairs(eng->fabric(), BroadPhase::Grid, all);  // the stage's refit: its bounds
   std::vector<OBB> b = cs.bounds();
-  PairFilter filter;
-  filter.configure(f, 1, semiAxes(1, ContactParams().mcd, ContactParams().rule).a);
+  const PairFilter filter = gapModelFilter(f);
   GridCollider g;
   std::vector<CPPair> first;
   g.collide(f, b, filter, first);
@@ -184,11 +198,9 @@ TEST(Collider, GridKeptBetweenCallsListsThePairsOfTheCPsThatMoved) {
         b[e].centre += d;
         b[e].extent.array() += d.norm();
       }
-    std::vector<CPPair> part, expect;
+    std::vector<CPPair> part;
     g.collide(f, b, filter, part, &moved);
-    for (Index i = 0; i < f.nElems(); ++i)
-      for (Index j = i + 1; j < f.nElems(); ++j)
-        if ((moved[i] || moved[j]) && !filter.excluded(f, i, j) && obbOverlap(b[i], b[j])) expect.push_back({i, j});
+    const std::vector<CPPair> expect = bruteForcePairs(f, b, filter, [&](Index i, Index j) { return moved[i] || moved[j]; });
     ASSERT_GT(expect.size(), 100u) << "round " << round;
     EXPECT_EQ(part, expect) << "round " << round;
   }
