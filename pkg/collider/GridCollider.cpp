@@ -49,7 +49,7 @@ const std::vector<Index>* GridCollider::CellTable::find(std::uint64_t key) const
 
 void GridCollider::aabb(const std::vector<OBB>& boxes, Index i) {
   const Vec3 half = boxes[i].axes.cwiseAbs() * boxes[i].extent;
-  lo_[i] = boxes[i].centre - half, hi_[i] = boxes[i].centre + half;
+  aabb_[i] = {boxes[i].centre - half, boxes[i].centre + half};
 }
 
 GridCollider::Cell GridCollider::cellOf(const Vec3& x) const {
@@ -58,7 +58,7 @@ GridCollider::Cell GridCollider::cellOf(const Vec3& x) const {
 }
 
 void GridCollider::insert(Index i) {
-  cellLo_[i] = cellOf(lo_[i]), cellHi_[i] = cellOf(hi_[i]);
+  cellLo_[i] = cellOf(aabb_[i].lo), cellHi_[i] = cellOf(aabb_[i].hi);
   for (std::int64_t x = cellLo_[i].x; x <= cellHi_[i].x; ++x)
     for (std::int64_t y = cellLo_[i].y; y <= cellHi_[i].y; ++y)
       for (std::int64_t z = cellLo_[i].z; z <= cellHi_[i].z; ++z) cells_.at(key(x, y, z)).push_back(i);
@@ -82,14 +82,14 @@ bool GridCollider::rebuild(const Fabric& f, const std::vector<OBB>& boxes) {
   const Index n = static_cast<Index>(boxes.size());
   constexpr Index kChunk = 1024;
   const Index chunks = chunkCount(n, kChunk);
-  lo_.resize(n), hi_.resize(n), cellLo_.resize(n), cellHi_.resize(n);
+  aabb_.resize(n), cellLo_.resize(n), cellHi_.resize(n);
   held_.assign(static_cast<std::size_t>(n), 0);
   chunkSide_.assign(chunks, 0);
   parallelFor(chunks, 2, threads(), [&](Index t) {
     Real side = 0;
     for (Index i = t * kChunk, end = std::min(n, i + kChunk); i < end; ++i) {
       aabb(boxes, i);
-      if (f.alive[i]) side = std::max(side, (hi_[i] - lo_[i]).maxCoeff());
+      if (f.alive[i]) side = std::max(side, (aabb_[i].hi - aabb_[i].lo).maxCoeff());
     }
     chunkSide_[t] = side;
   });
@@ -115,7 +115,7 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
   const int nThreads = threads();
   // The grid follows the boxes: a partial call moves the flagged CPs (a broken one leaves it), unless
   // one spans too many cells or the grid holds other CPs; then, as a full call, it is built afresh.
-  bool fresh = !dirty || static_cast<Index>(lo_.size()) != n || !(cellSize > 0);
+  bool fresh = !dirty || static_cast<Index>(aabb_.size()) != n || !(cellSize > 0);
   flagged_.clear();
   if (dirty)
     for (Index i = 0; i < n; ++i)
@@ -124,7 +124,7 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
     for (Index i : flagged_) {
       if (held_[i]) remove(i);
       aabb(boxes, i);
-      const Cell a = cellOf(lo_[i]), b = cellOf(hi_[i]);
+      const Cell a = cellOf(aabb_[i].lo), b = cellOf(aabb_[i].hi);
       fresh = fresh || b.x - a.x >= kMaxSpan || b.y - a.y >= kMaxSpan || b.z - a.z >= kMaxSpan;
     }
     if (!fresh)
@@ -153,6 +153,8 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
       const Index i = cp(k);
       if (!held_[i]) continue;
       mine.clear();
+      const Aabb bi = aabb_[i];
+      const Cell ci = cellLo_[i];
       for (std::int64_t x = cellLo_[i].x; x <= cellHi_[i].x; ++x)
         for (std::int64_t y = cellLo_[i].y; y <= cellHi_[i].y; ++y)
           for (std::int64_t z = cellLo_[i].z; z <= cellHi_[i].z; ++z) {
@@ -160,10 +162,12 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
             if (!cell) continue;
             for (const Index j : *cell) {
               if (j == i || (j < i && flagged(j))) continue;
-              if ((hi_[i].array() < lo_[j].array()).any() || (hi_[j].array() < lo_[i].array()).any()) continue;
+              const Aabb& bj = aabb_[j];
+              if ((bi.hi.array() < bj.lo.array()).any() || (bj.hi.array() < bi.lo.array()).any()) continue;
               // The pair belongs to the cell of its AABB intersection's lowest corner: once only.
-              const Cell corner = cellOf(lo_[i].cwiseMax(lo_[j]));
-              if (corner.x != x || corner.y != y || corner.z != z) continue;
+              // That cell is the larger of the two lowest cells on each axis (cellOf is monotone).
+              const Cell& cj = cellLo_[j];
+              if (std::max(ci.x, cj.x) != x || std::max(ci.y, cj.y) != y || std::max(ci.z, cj.z) != z) continue;
               const Index lo = std::min(i, j), hi = std::max(i, j);  // the full phase's argument order
               if (filter.excluded(f, lo, hi)) continue;
               ++chunkTests_[t];

@@ -52,7 +52,10 @@ class GridCollider {
   void insert(Index i);
   void remove(Index i);
   bool rebuild(const Fabric& f, const std::vector<OBB>& boxes);
-  std::vector<Vec3> lo_, hi_;              // AABBs as the grid holds them
+  struct Aabb {
+    Vec3 lo, hi;
+  };
+  std::vector<Aabb> aabb_;                 // AABBs as the grid holds them (a CP's corners together)
   std::vector<Cell> cellLo_, cellHi_;      // each CP's range of cells (lowest and highest per axis)
   std::vector<std::uint8_t> held_;         // per CP: in the grid (alive at its last entry)
   // The occupied cells by key: open addressing with linear probing in a power-of-two table at most

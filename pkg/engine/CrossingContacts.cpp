@@ -92,60 +92,73 @@ void CrossingContacts::handBack(Index id, HandBack why, std::vector<std::uint8_t
   ++counts.handedBack[static_cast<int>(why)];
 }
 
+// Each crossing's step (threads: it reads only the fabric and its own crossing), then what the
+// steps decide applied in crossing order (the footprints are shared): the same bits for any thread
+// count.
+CrossingContacts::Step CrossingContacts::stepOne(const Fabric& f, const ContactParams& p, const Vec3Array& chord,
+                                                 const Crossing& x) const {
+  Step st;
+  const auto give = [&](HandBack why) {
+    st.verdict = 1 + static_cast<int>(why);
+    return st;
+  };
+  const auto rule = [](int why) { return why == 1 + static_cast<int>(HandBack::Break) ? HandBack::Break : HandBack::Kink; };
+  // A Newton step from the last step's closest points: they move far less than a CP a step, so
+  // one step keeps them within (their motion)^2 / (the lines' curvature radius) of the exact ones;
+  // up to two more where it moved more than kRefine (a fast slide over a rounded corner, whose
+  // lag left a few um of overlap to the next step, more at a shorter time step).
+  YarnPlace& a = st.a;
+  YarnPlace& b = st.b;
+  a = x.a, b = x.b;
+  Real moved = closestStep(f, a, b, &st.apart), last = moved;
+  for (int it = 0; it < 2 && last > kRefine; ++it) {
+    last = closestStep(f, a, b, &st.apart);
+    moved = last < 0 ? last : moved + last;
+  }
+  if (moved < 0) return give(moved == kLeftYarn ? HandBack::Slide : HandBack::Turn);
+  // The closest points jumped rather than slid (a quarter CP in a step is thousands of m/s: the
+  // lines' closest approach moved to another place, a kinked or folded piece's).
+  if (moved > kJump * std::min(f.restLength[x.a.cp], f.restLength[x.b.cp])) return give(HandBack::Slide);
+  canonical(f, a), canonical(f, b);
+  if (const int why = std::max(usable(f, chord, a.cp, kKinkCos), usable(f, chord, b.cp, kKinkCos)); why > 0)
+    return give(rule(why));
+  if (const int why = std::max(whole(f, chord, x.fa0, x.fa1, a.cp), whole(f, chord, x.fb0, x.fb1, b.cp)); why > 0)
+    return give(rule(why));
+  if (std::abs(chord[a.cp].dot(chord[b.cp])) > kTurnCos) return give(HandBack::Turn);
+  const Index na = f.elem0[a.cp] + (a.s < 0.5 ? 0 : 1), nb = f.elem0[b.cp] + (b.s < 0.5 ? 0 : 1);
+  if (st.apart - semiAxesAt(f, a.cp, a.s, p.rule).b - semiAxesAt(f, b.cp, b.s, p.rule).b >
+      f.secRadius[na] + f.secRadius[nb])
+    return give(HandBack::Separation);
+  // Its footprint (drawn kFootprintSlide wider) still holds, or the one at the new places.
+  st.same = a.cp == x.a.cp && b.cp == x.b.cp && std::abs(a.s - x.fsA) <= kFootprintSlide &&
+            std::abs(b.s - x.fsB) <= kFootprintSlide;
+  if (!st.same) {
+    Crossing y = x;
+    y.a = a, y.b = b;
+    footprint(f, y, p, st.fa0, st.fa1, st.fb0, st.fb1);
+  }
+  return st;
+}
+
 bool CrossingContacts::track(const Fabric& f, const ContactParams& p, const Vec3Array& chord,
                              std::vector<std::uint8_t>& renew) {
   const Index n = static_cast<Index>(all_.size());
   gone_.assign(all_.size(), 0);
   returned_.clear();
+  steps_.resize(all_.size());
+  parallelFor(n, 64, threads(), [&](Index id) { steps_[id] = stepOne(f, p, chord, all_[id]); });
   bool grew = false;
   for (Index id = 0; id < n; ++id) {
     Crossing& x = all_[id];
-    // A Newton step from the last step's closest points: they move far less than a CP a step, so
-    // one step keeps them within (their motion)^2 / (the lines' curvature radius) of the exact ones;
-    // up to two more where it moved more than kRefine (a fast slide over a rounded corner, whose
-    // lag left a few um of overlap to the next step, more at a shorter time step).
-    YarnPlace a = x.a, b = x.b;
-    Real apart = 0;
-    Real moved = closestStep(f, a, b, &apart), last = moved;
-    for (int it = 0; it < 2 && last > kRefine; ++it) {
-      last = closestStep(f, a, b, &apart);
-      moved = last < 0 ? last : moved + last;
-    }
-    if (moved < 0) {
-      handBack(id, moved == kLeftYarn ? HandBack::Slide : HandBack::Turn, renew);
+    const Step& st = steps_[id];
+    if (st.verdict > 0) {
+      handBack(id, static_cast<HandBack>(st.verdict - 1), renew);
       continue;
     }
-    // The closest points jumped rather than slid (a quarter CP in a step is thousands of m/s: the
-    // lines' closest approach moved to another place, a kinked or folded piece's).
-    if (moved > kJump * std::min(f.restLength[x.a.cp], f.restLength[x.b.cp])) {
-      handBack(id, HandBack::Slide, renew);
-      continue;
-    }
-    canonical(f, a), canonical(f, b);
-    if (const int why = std::max(usable(f, chord, a.cp, kKinkCos), usable(f, chord, b.cp, kKinkCos)); why > 0) {
-      handBack(id, why == 1 + static_cast<int>(HandBack::Break) ? HandBack::Break : HandBack::Kink, renew);
-      continue;
-    }
-    if (const int why = std::max(whole(f, chord, x.fa0, x.fa1, a.cp), whole(f, chord, x.fb0, x.fb1, b.cp)); why > 0) {
-      handBack(id, why == 1 + static_cast<int>(HandBack::Break) ? HandBack::Break : HandBack::Kink, renew);
-      continue;
-    }
-    if (std::abs(chord[a.cp].dot(chord[b.cp])) > kTurnCos) {
-      handBack(id, HandBack::Turn, renew);
-      continue;
-    }
-    const Index na = f.elem0[a.cp] + (a.s < 0.5 ? 0 : 1), nb = f.elem0[b.cp] + (b.s < 0.5 ? 0 : 1);
-    if (apart - semiAxesAt(f, a.cp, a.s, p.rule).b - semiAxesAt(f, b.cp, b.s, p.rule).b >
-        f.secRadius[na] + f.secRadius[nb]) {
-      handBack(id, HandBack::Separation, renew);
-      continue;
-    }
-    const bool same = a.cp == x.a.cp && b.cp == x.b.cp && std::abs(a.s - x.fsA) <= kFootprintSlide &&
-                      std::abs(b.s - x.fsB) <= kFootprintSlide;
-    x.a = a, x.b = b, x.apart = apart;
-    if (same) continue;  // its footprint (drawn kFootprintSlide wider) still holds
-    Index a0, a1, b0, b1;
-    footprint(f, x, p, a0, a1, b0, b1);
+    const YarnPlace &a = st.a, &b = st.b;
+    x.a = a, x.b = b, x.apart = st.apart;
+    if (st.same) continue;
+    const Index a0 = st.fa0, a1 = st.fa1, b0 = st.fb0, b1 = st.fb1;
     x.fsA = a.s, x.fsB = b.s;
     if (a0 == x.fa0 && a1 == x.fa1 && b0 == x.fb0 && b1 == x.fb1) continue;
     // The footprint moved: the CPs it left return to the general pipeline, those it took leave it.
@@ -219,10 +232,18 @@ bool CrossingContacts::form(const Fabric& f, const std::vector<CPContact>& conta
   return any;
 }
 
-void CrossingContacts::exclude(std::vector<CPPair>& pairs) const {
-  pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
-                             [&](const CPPair& q) { return foot_.covers(q.a, q.b); }),
-              pairs.end());
+// By fixed chunks (threads), kept in order.
+void CrossingContacts::exclude(std::vector<CPPair>& pairs) {
+  constexpr Index kChunk = 8192;
+  const Index n = static_cast<Index>(pairs.size());
+  keptPairs_.resize(static_cast<std::size_t>(chunkCount(n, kChunk)));
+  parallelFor(static_cast<Index>(keptPairs_.size()), 1, threads(), [&](Index t) {
+    std::vector<CPPair>& kept = keptPairs_[t];
+    kept.clear();
+    for (Index k = t * kChunk, end = std::min(n, k + kChunk); k < end; ++k)
+      if (!foot_.covers(pairs[k].a, pairs[k].b)) kept.push_back(pairs[k]);
+  });
+  joinChunks(keptPairs_, pairs, threads());
 }
 
 void CrossingContacts::exclude(std::vector<CPContact>& contacts) const {
@@ -248,10 +269,12 @@ void CrossingContacts::measureOne(const Fabric& f, Index id, const ContactParams
   c.drift = x.apart > r ? x.apart - r : 0.0;
 }
 
+// Threads: a crossing is listed at most once (measure).
 void CrossingContacts::keepImpulses(const std::vector<CPContact>& contacts, const std::vector<Real>& lambda) {
-  for (Crossing& x : all_) x.lambda = 0;
-  for (std::size_t k = 0; k < contacts.size() && k < lambda.size(); ++k)
+  parallelFor(static_cast<Index>(all_.size()), kParallelGrain, threads(), [&](Index id) { all_[id].lambda = 0; });
+  parallelFor(static_cast<Index>(std::min(contacts.size(), lambda.size())), kParallelGrain, threads(), [&](Index k) {
     if (contacts[k].crossing >= 0) all_[contacts[k].crossing].lambda = lambda[k];
+  });
 }
 
 void CrossingContacts::set(const Fabric& f, const std::vector<Crossing>& all, const ContactParams& p) {

@@ -37,9 +37,11 @@
 #pragma once
 #include "collider/CandidatePairs.hpp"
 #include "collider/CrossingFootprints.hpp"
+#include "core/Parallel.hpp"
 #include "geom/CPContact.hpp"
 #include "geom/YarnCurve.hpp"
 #include "law/ContactParams.hpp"
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -102,7 +104,7 @@ class CrossingContacts {
   /// one formed.
   bool form(const Fabric& f, const std::vector<CPContact>& contacts, const ContactParams& p, const Vec3Array& chord);
   /// Removes from `pairs` (or contacts) those a crossing covers, keeping the order.
-  void exclude(std::vector<CPPair>& pairs) const;
+  void exclude(std::vector<CPPair>& pairs);
   void exclude(std::vector<CPContact>& contacts) const;
   /// Each crossing's contact at the current positions (the sections' measure capped by its memory,
   /// which it then keeps with its side); those with gap <= reach(contact) appended to `out`.
@@ -127,20 +129,46 @@ class CrossingContacts {
   static int usable(const Fabric& f, const Vec3Array& chord, Index e, Real kinkCos);
   static int whole(const Fabric& f, const Vec3Array& chord, Index lo, Index hi, Index e);
   void handBack(Index id, HandBack why, std::vector<std::uint8_t>& renew);
+  // What track decides for one crossing: its new places and their lines' distance, a hand-back
+  // rule (verdict 1 + HandBack) or 0, and unless its footprint still holds (same) the new one.
+  struct Step {
+    YarnPlace a, b;
+    Real apart = 0;
+    int verdict = 0;
+    bool same = true;
+    Index fa0 = 0, fa1 = -1, fb0 = 0, fb1 = -1;
+  };
+  Step stepOne(const Fabric& f, const ContactParams& p, const Vec3Array& chord, const Crossing& x) const;
   std::vector<Crossing> all_;
   std::vector<std::uint8_t> gone_;  // track: the crossings handed back this step
   std::vector<ReturnedFootprint> returned_;
   CrossingFootprints foot_;
+  std::vector<Step> steps_;                     // track: each crossing's step
+  std::vector<std::vector<CPPair>> keptPairs_;  // exclude: each chunk's pairs kept
+  std::vector<std::vector<CPContact>> slices_;  // measure: each chunk's listed contacts
 };
 
+// Fixed chunks of the crossings (threads; measureOne writes only its own crossing), appended in
+// chunk order: the same list for any thread count.
 template <class Reach>
 void CrossingContacts::measure(const Fabric& f, const ContactParams& p, Reach&& reach,
                                std::vector<CPContact>& out) {
+  constexpr Index kChunk = 512;
+  const Index n = static_cast<Index>(all_.size());
+  slices_.resize(static_cast<std::size_t>(chunkCount(n, kChunk)));
+  parallelFor(static_cast<Index>(slices_.size()), 1, threads(), [&](Index t) {
+    std::vector<CPContact>& listed = slices_[t];
+    listed.clear();
+    CPContact c;
+    for (Index id = t * kChunk, end = std::min(n, id + kChunk); id < end; ++id) {
+      measureOne(f, id, p, c);
+      if (c.gap <= reach(c)) listed.push_back(c);
+    }
+  });
   counts.listed = 0;
-  CPContact c;
-  for (Index id = 0; id < static_cast<Index>(all_.size()); ++id) {
-    measureOne(f, id, p, c);
-    if (c.gap <= reach(c)) out.push_back(c), ++counts.listed;
+  for (const std::vector<CPContact>& listed : slices_) {
+    out.insert(out.end(), listed.begin(), listed.end());
+    counts.listed += static_cast<long>(listed.size());
   }
 }
 

@@ -112,8 +112,9 @@ void CollisionStage::broad(const Fabric& f) {
         for (std::size_t e = 0; e < grown_.size(); ++e)
           if (outside_[e]) dirtyYarn_[f.elemYarn[e]] = 1;
       }
-      for (Index e = 0; e < static_cast<Index>(grown_.size()); ++e)
+      parallelFor(static_cast<Index>(grown_.size()), kParallelGrain, threads(), [&](Index e) {
         if (renewed(e)) skinBoxes_[e] = skinBox(f, e);
+      });
       // The pairs between two CPs kept, by fixed chunks (threads) joined in order; merged with the
       // fresh ones (both sorted) on the threads.
       constexpr Index kChunk = 8192;
@@ -137,7 +138,7 @@ void CollisionStage::broad(const Fabric& f) {
   }
   stats.renewed = 0;
   skinBoxes_.resize(grown_.size());
-  for (Index e = 0; e < static_cast<Index>(grown_.size()); ++e) skinBoxes_[e] = skinBox(f, e);
+  parallelFor(static_cast<Index>(grown_.size()), kParallelGrain, threads(), [&](Index e) { skinBoxes_[e] = skinBox(f, e); });
   if (broadPhase == BroadPhase::YarnTree) tree.collide(f, skinBoxes_, filter_, pairs_);
   else if (broadPhase == BroadPhase::Grid) grid.collide(f, skinBoxes_, filter_, pairs_);
   else sap.collide(f, skinBoxes_, filter_, pairs_);

@@ -410,6 +410,10 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
     }
   }
   wordStart_.back() = static_cast<Index>(words_.size());
+  // The tail's rows on a body (updated every sweep), once rather than a scan of the tail per sweep.
+  tailBodies_.clear();
+  for (Index k = tailStart; k < nRows; ++k)
+    if (packed ? packed_[k].body : rows_[k].body >= 0) tailBodies_.push_back(k - tailStart);
   dirty_.assign(static_cast<std::size_t>((tailRows + 63) / 64), ~std::uint64_t(0));
   if (tailRows % 64) dirty_.back() = (std::uint64_t(1) << (tailRows % 64)) - 1;
   skipped_ = 0;
@@ -456,8 +460,7 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
     // velocities) are updated every sweep.
     if (it > 0) {
       dirty_.swap(next_);
-      for (Index k = tail; k < nRows; ++k)
-        if (packed ? packed_[k].body : rows_[k].body >= 0) dirty_[(k - tailStart) >> 6] |= std::uint64_t(1) << ((k - tailStart) & 63);
+      for (const Index r : tailBodies_) dirty_[r >> 6] |= std::uint64_t(1) << (r & 63);
     }
     next_.assign(dirty_.size(), 0);
     Index updated = 0;

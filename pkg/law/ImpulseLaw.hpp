@@ -185,6 +185,7 @@ class ImpulseLaw {
   std::vector<Index> wordStart_, words_;  // per node its tail rows' words of the bit sets (CSR) ...
   std::vector<std::uint64_t> masks_;      // ... and each word's rows
   std::vector<std::uint64_t> dirty_, next_;  // this sweep's rows to update (after the one updated), the next sweep's
+  std::vector<Index> tailBodies_;              // the tail's rows on a body, by their place in the tail
   long skipped_ = 0;  // row updates the active set skipped in the last solve
   Real solverTol_ = 0;  // the solve's tolerance on a row's miss [m/s] (resolve)
 };
