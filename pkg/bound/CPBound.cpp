@@ -8,13 +8,7 @@ namespace woven {
 // Each node on its own (threads: Parallel.hpp).
 void updateSectionFrames(Fabric& f, Vec3Array& tangent) {
   tangent.resize(f.pos.size());
-  parallelFor(f.nNodes(), kParallelGrain, threads(), [&](Index k) {
-    const Vec3 t = yarnTangentAt(f, k);
-    tangent[k] = t;
-    Vec3 d = f.secDir[k] - f.secDir[k].dot(t) * t;  // turn the section with the yarn
-    const Real len = d.norm();
-    f.secDir[k] = len > 1e-6 ? Vec3(d / len) : t.unitOrthogonal();
-  });
+  parallelFor(f.nNodes(), kParallelGrain, threads(), [&](Index k) { turnSectionFrame(f, k, tangent); });
 }
 
 OBB cpBound(const Fabric& f, const Vec3Array& tangent, Index e, SectionRule rule, Real margin) {

@@ -24,8 +24,17 @@ inline Vec3 yarnTangentAt(const Fabric& f, Index k) {
   return (f.pos[b] - f.pos[a]).normalized();
 }
 
-/// Unit tangent of every node (yarnTangentAt) into `tangent`, and Fabric::secDir made unit and
+/// Unit tangent of node k (yarnTangentAt) into tangent[k], and Fabric::secDir[k] made unit and
 /// normal to it (the section turns with the yarn).
+inline void turnSectionFrame(Fabric& f, Index k, Vec3Array& tangent) {
+  const Vec3 t = yarnTangentAt(f, k);
+  tangent[k] = t;
+  Vec3 d = f.secDir[k] - f.secDir[k].dot(t) * t;
+  const Real len = d.norm();
+  f.secDir[k] = len > 1e-6 ? Vec3(d / len) : t.unitOrthogonal();
+}
+
+/// turnSectionFrame of every node (`tangent` resized to the node count).
 void updateSectionFrames(Fabric& f, Vec3Array& tangent);
 
 /// OBB of CP e with its sections as they are, enlarged by margin [m] on every side.

@@ -303,6 +303,7 @@ class CollisionStage : public StepHook {
   std::vector<std::vector<Real>> overlapChunks_;
   std::vector<Real> overlapGaps_;
   std::vector<std::uint8_t> dirty_, dirtyYarn_, outside_;
+  std::vector<std::uint8_t> leftSkin_;  // refit: per CP, its grown box left its skin box (or has none)
   std::vector<CPPair> keptPairs_, freshPairs_, cachePairs_;
   std::vector<std::vector<CPPair>> keptChunks_;  // the kept pairs of each fixed chunk (broad)
   std::vector<PairCache> cache_, cacheOld_;  // model Paper with a contact cache

@@ -12,49 +12,6 @@ namespace woven {
 
 using namespace stage;  // engine/StageUtil.hpp
 
-void CollisionStage::refit(Fabric& f, Real dt) {
-  horizon_ = dt;
-  if (filter_.yarnExclude.size() != f.yarns.size())
-    filter_.configure(f, params_.selfExclude,
-                      params_.model == ContactModel::Gap ? semiAxes(1, params_.mcd, params_.rule).a : 1.0);
-  updateSectionFrames(f, tangent_);
-  refitBounds(f, tangent_, params_.rule, params_.margin, bounds_);
-  // Each CP's broad-phase box grows by the farthest its nodes can drift in the step, and (gap model)
-  // be moved by the position projection after it.
-  grow_.resize(bounds_.size());
-  const Real projected = projectionReach(dt);
-  speed_.resize(bounds_.size());
-  parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
-    const Index i = f.elem0[e];
-    speed_[e] = std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm()));
-    grow_[e] = dt * speed_[e] + projected;
-  });
-  // Each node's odometer, the path it has travelled between the passes (at least its displacement,
-  // however it moved: drifts, projections, checks), and each CP's, its two nodes' sum: the narrow
-  // phase's screen bounds how far a pair's axes have come since it last measured them.
-  if (lastPos_.size() != f.pos.size()) lastPos_ = f.pos, travelled_.assign(f.pos.size(), 0.0);
-  parallelFor(f.nNodes(), kParallelGrain, threads(), [&](Index k) {
-    travelled_[k] += (f.pos[k] - lastPos_[k]).norm();
-    lastPos_[k] = f.pos[k];
-  });
-  odometer_.resize(f.elem0.size());
-  parallelFor(f.nElems(), kParallelGrain, threads(),
-              [&](Index e) { odometer_[e] = travelled_[f.elem0[e]] + travelled_[f.elem0[e] + 1]; });
-  // Model Gap: each CP's unit chord and its length, once for the four or so pairs that share it and
-  // the crossings (the same expressions as pair by pair: same bits).
-  if (params_.model == ContactModel::Gap) {
-    chords_.unit.resize(f.nElems());
-    chords_.length.resize(f.nElems());
-    parallelFor(f.nElems(), kParallelGrain, threads(), [&](Index e) {
-      const Index i = f.elem0[e];
-      const Vec3 d = f.pos[i + 1] - f.pos[i];
-      chords_.unit[e] = d.normalized();
-      chords_.length[e] = d.norm();
-    });
-  }
-  growBoxes(bounds_, grow_, grown_);
-}
-
 namespace {
 // Box a lies inside box b: on each of b's axes, a's projection lies within b's slab.
 bool inside(const OBB& a, const OBB& b) {
@@ -63,6 +20,54 @@ bool inside(const OBB& a, const OBB& b) {
   return ((d.cwiseAbs() + c * a.extent).array() <= b.extent.array()).all();
 }
 }  // namespace
+
+// One pass over the nodes (section frames, odometers), then one over the CPs (every per-CP figure
+// below, each by its own expression: the same bits as a pass per figure, without re-reading the
+// boxes between passes).
+void CollisionStage::refit(Fabric& f, Real dt) {
+  horizon_ = dt;
+  if (filter_.yarnExclude.size() != f.yarns.size())
+    filter_.configure(f, params_.selfExclude,
+                      params_.model == ContactModel::Gap ? semiAxes(1, params_.mcd, params_.rule).a : 1.0);
+  // Each node's section frame turned with its yarn (bound/CPBound's updateSectionFrames), and its
+  // odometer: the path it has travelled between the passes (at least its displacement, however it
+  // moved: drifts, projections, checks).
+  tangent_.resize(f.pos.size());
+  if (lastPos_.size() != f.pos.size()) lastPos_ = f.pos, travelled_.assign(f.pos.size(), 0.0);
+  parallelFor(f.nNodes(), kParallelGrain, threads(), [&](Index k) {
+    turnSectionFrame(f, k, tangent_);
+    travelled_[k] += (f.pos[k] - lastPos_[k]).norm();
+    lastPos_[k] = f.pos[k];
+  });
+  // Per CP: its OBB (bounds_); its faster node's speed, and the box grown by the farthest its nodes
+  // can drift in the step and (gap model) be moved by the position projection after it (grown_);
+  // its odometer, its two nodes' sum (the narrow phase's screen bounds how far a pair's axes have
+  // come since it last measured them); model Gap: its unit chord and length, once for the four or
+  // so pairs that share it and the crossings; and whether its grown box left the skin box of the
+  // last broad phase (broad).
+  const Index ne = f.nElems();
+  bounds_.resize(ne), grown_.resize(ne), grow_.resize(ne), speed_.resize(ne), odometer_.resize(ne);
+  const bool gap = params_.model == ContactModel::Gap;
+  if (gap) chords_.unit.resize(ne), chords_.length.resize(ne);
+  const bool skins = skinBoxes_.size() == static_cast<std::size_t>(ne);
+  leftSkin_.resize(ne);
+  const Real projected = projectionReach(dt);
+  parallelFor(ne, kParallelGrain, threads(), [&](Index e) {
+    const Index i = f.elem0[e];
+    bounds_[e] = cpBound(f, tangent_, e, params_.rule, params_.margin);
+    speed_[e] = std::sqrt(std::max(f.vel[i].squaredNorm(), f.vel[i + 1].squaredNorm()));
+    grow_[e] = dt * speed_[e] + projected;
+    grown_[e] = bounds_[e];
+    grown_[e].extent.array() += grow_[e];
+    odometer_[e] = travelled_[i] + travelled_[i + 1];
+    if (gap) {
+      const Vec3 d = f.pos[i + 1] - f.pos[i];
+      chords_.unit[e] = d.normalized();
+      chords_.length[e] = d.norm();
+    }
+    leftSkin_[e] = !skins || !inside(grown_[e], skinBoxes_[e]);
+  });
+}
 
 // A renewed CP's skin box: its grown box with the skin on every side, stretched kSkinSteps steps
 // ahead along its mean velocity. A CP carried by the impact's waves then stays inside for several
@@ -94,12 +99,12 @@ OBB CollisionStage::skinBox(const Fabric& f, Index e) const {
 // list.
 void CollisionStage::broad(const Fabric& f) {
   if (pairsValid_ && skinBoxes_.size() == grown_.size()) {
-    // The containment test of every CP (threads), then the CPs and yarns that left (in order).
+    // The CPs out of their skin boxes (refit's test), then the CPs and yarns that left (in order).
     outside_.resize(grown_.size());
     // and the CPs a persistent crossing handed back (their pairs return).
     const bool renewing = renew_.size() == grown_.size();
     parallelFor(static_cast<Index>(grown_.size()), kParallelGrain, threads(), [&](Index e) {
-      outside_[e] = !inside(grown_[e], skinBoxes_[e]) || (renewing && renew_[e]);
+      outside_[e] = leftSkin_[e] || (renewing && renew_[e]);
     });
     stats.renewed = std::count(outside_.begin(), outside_.end(), 1);
     if (stats.renewed == 0) return;
