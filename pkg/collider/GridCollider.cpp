@@ -121,14 +121,19 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
     for (Index i = 0; i < n; ++i)
       if ((*dirty)[i]) flagged_.push_back(i);
   if (!fresh) {
+    // A CP that stays in the cells it is in (most: its box moved within the cell size) keeps its
+    // entries; the pairs do not depend on the order of a cell's entries (each CP's list is sorted).
+    moving_.clear();
     for (Index i : flagged_) {
-      if (held_[i]) remove(i);
       aabb(boxes, i);
       const Cell a = cellOf(aabb_[i].lo), b = cellOf(aabb_[i].hi);
+      if (held_[i] && f.alive[i] && a == cellLo_[i] && b == cellHi_[i]) continue;
+      if (held_[i]) remove(i);
+      moving_.push_back(i);
       fresh = fresh || b.x - a.x >= kMaxSpan || b.y - a.y >= kMaxSpan || b.z - a.z >= kMaxSpan;
     }
     if (!fresh)
-      for (Index i : flagged_)
+      for (Index i : moving_)
         if (f.alive[i]) insert(i);
   }
   if (fresh && !rebuild(f, boxes)) return;

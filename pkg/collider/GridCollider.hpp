@@ -42,6 +42,7 @@ class GridCollider {
  private:
   struct Cell {
     std::int64_t x, y, z;
+    bool operator==(const Cell& o) const { return x == o.x && y == o.y && z == o.z; }
   };
   static std::uint64_t key(std::int64_t x, std::int64_t y, std::int64_t z) {
     const auto part = [](std::int64_t v) { return static_cast<std::uint64_t>(v + (1 << 20)) & 0x1fffff; };
@@ -81,6 +82,7 @@ class GridCollider {
   std::vector<std::vector<CPPair>> chunkPairs_;  // pairs of each fixed chunk of CPs
   std::vector<long> chunkTests_;                 // OBB tests of each chunk
   std::vector<Index> flagged_;                   // the CPs a partial call lists pairs for
+  std::vector<Index> moving_;                    // ... of which those that change cells
 };
 
 }  // namespace woven
