@@ -33,7 +33,7 @@ void CollisionStage::setParams(const ContactParams& p) {
 }
 
 void CollisionStage::invalidateCache() {
-  cache_.clear(), screen_.clear(), memo_.clear(), freeMemo_.clear(), cachePairs_.clear(), forgetHeld_ = true;
+  cache_.clear(), memo_.clear(), cachePairs_.clear(), forgetHeld_ = true;
   // The crossings' pairs return to the general pipeline: a full broad phase lists them again.
   if (!crossings_.empty()) pairsValid_ = false;
   crossings_.reset(Fabric{});

@@ -216,31 +216,29 @@ class CollisionStage : public StepHook {
   void seedReturned(const Fabric& f);
   // A pair's memory (model Gap; kept while the broad phase keeps the pair, forgotten with the cache):
   // its kind (Side / Cross hysteresis), the side its normal points to, and the measure its sections
-  // claimed (GapFunction.hpp, capMeasure). Only the pairs that have one hold one, in a pool
-  // (memo_, its free slots freeMemo_); each candidate pair's PairScreen follows the pair list and
-  // names its slot. Before, one 120-byte entry per candidate pair was copied to the new list at
-  // each change of it (every step: ~27 000 pairs, ~6 000 with a memory, in the default impact).
+  // claimed (GapFunction.hpp, capMeasure). Apart from PairCache: small, and only this is remapped.
   struct PairMemo {
-    bool side = false;
+    bool memo = false, side = false;
     // Returned by a persistent crossing and not measured since: a point without a remembered
     // measure may claim only the room its axes leave (capMeasure at 0), so that the chords taking
     // over from the crossing's curves do not start in an overlap the curves did not have.
     bool held = false;
-    // Its contact points at the last narrow phase that measured it (1 or 2; 0: none yet, a pair a
-    // crossing returned): their places sA, sB, the normal and the sections' measure hA + hB [m] at
-    // each.
+    // Its contact points at the last narrow phase that measured it (1 or 2; 0: measure forgotten,
+    // the pair was not measured since its boxes parted): their places sA, sB, the normal and the
+    // sections' measure hA + hB [m] at each.
     int memoPoints = 0;
     Real memoS[2] = {0, 0}, memoT[2] = {0, 0}, memoMeasure[2] = {0, 0};
     Vec3 memoNormal[2] = {Vec3::Zero(), Vec3::Zero()};
-  };
-  struct PairScreen {
     // The screen (narrow): the axes' distance less both CPs' widest sections at the MCD when the
     // pair was last evaluated [m] (-inf: never), and their odometers' sum then [m].
     Real clear = -INFINITY, odometer = 0;
-    Index slot = -1;  // its memory in memo_ (-1: none: new to the broad phase, or forgotten since
-                      // its boxes parted, the sections then free to turn unseen)
+    /// The measure forgotten (the pair not measured since its boxes parted); the screen kept.
+    void forget() {
+      const Real c = clear, o = odometer;
+      *this = PairMemo();
+      clear = c, odometer = o;
+    }
   };
-  Index keepMemo(const PairMemo& m);  // a free slot of memo_ holding m
   // A pair's last static contact (model Paper, contact_cache > 0: ContactParams::cacheDistance).
   struct PairCache {
     bool valid = false;
@@ -307,13 +305,7 @@ class CollisionStage : public StepHook {
   std::vector<CPPair> keptPairs_, freshPairs_, cachePairs_;
   std::vector<std::vector<CPPair>> keptChunks_;  // the kept pairs of each fixed chunk (broad)
   std::vector<PairCache> cache_, cacheOld_;  // model Paper with a contact cache
-  std::vector<PairScreen> screen_, screenOld_;  // model Gap: per pair of cachePairs_
-  std::vector<std::uint8_t> screenKept_;        // remapCache: per old pair, followed by a new one
-  std::vector<PairMemo> memo_;                  // model Gap: the memories, by slot
-  std::vector<Index> freeMemo_;                 // ... and the free slots (a stack)
-  // narrow: per chunk of pairs, the slots forgotten and the memories made (pair index, memory)
-  std::vector<std::vector<Index>> forgotChunks_;
-  std::vector<std::vector<std::pair<Index, PairMemo>>> madeChunks_;
+  std::vector<PairMemo> memo_, memoOld_;     // model Gap
   std::vector<long> sectionStamp_;  // per CP: narrow phase in which its sections last changed
   long cacheClock_ = 0;
   bool pairsChanged_ = false;

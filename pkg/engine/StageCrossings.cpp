@@ -37,16 +37,14 @@ void CollisionStage::seedReturned(const Fabric& f) {
     for (Index a = r.a0; a <= r.a1; ++a)
       for (auto it = std::lower_bound(pairs_.begin(), pairs_.end(), CPPair{a, r.b0});
            it != pairs_.end() && it->a == a && it->b <= r.b1; ++it) {
-        PairScreen& pc = screen_[it - pairs_.begin()];
-        if (pc.slot >= 0) continue;
+        PairMemo& pc = memo_[it - pairs_.begin()];
+        if (pc.memo) continue;
         const Index i = f.elem0[it->a], j = f.elem0[it->b];
         const SegmentClosest sc = closestSegmentSegment(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1]);
         const Vec3 d = ((1 - sc.t) * f.pos[j] + sc.t * f.pos[j + 1]) - ((1 - sc.s) * f.pos[i] + sc.s * f.pos[i + 1]);
         if (d.dot(r.normal) <= 0) continue;
-        PairMemo m;
-        m.held = true;
-        m.memoNormal[0] = m.memoNormal[1] = r.normal;
-        pc.slot = keepMemo(m);
+        pc.memo = true, pc.side = false, pc.held = true, pc.memoPoints = 0;
+        pc.memoNormal[0] = pc.memoNormal[1] = r.normal;
       }
 }
 

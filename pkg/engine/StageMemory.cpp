@@ -29,7 +29,6 @@ struct CollisionStage::Memory {
   std::vector<Crossing> crossings;
   std::vector<CPPair> keys;  // the pairs of memo / cache, sorted
   std::vector<PairMemo> memo;
-  std::vector<std::uint8_t> remembered;  // per key: memo holds its memory
   std::vector<PairCache> cache;
   long cacheClock = 0;
   std::vector<long> sectionStamp;
@@ -52,14 +51,13 @@ std::string CollisionStage::memory() const {
   }
   // The pairs with a memory: the gap model's remembered ones, the paper model's valid carried ones.
   std::vector<std::size_t> kept;
-  const auto remembers = [&](std::size_t k) { return k < screen_.size() && screen_[k].slot >= 0; };
   for (std::size_t k = 0; k < cachePairs_.size(); ++k)
-    if (remembers(k) || (k < cache_.size() && cache_[k].valid)) kept.push_back(k);
+    if ((k < memo_.size() && memo_[k].memo) || (k < cache_.size() && cache_[k].valid)) kept.push_back(k);
   o.put(static_cast<std::uint64_t>(kept.size()));
   for (std::size_t k : kept) {
     o.put(cachePairs_[k].a), o.put(cachePairs_[k].b);
-    const PairMemo m = remembers(k) ? memo_[screen_[k].slot] : PairMemo();
-    o.put(std::uint8_t(remembers(k))), o.put(std::uint8_t(m.side)), o.put(std::uint8_t(m.held)), o.put(std::int32_t(m.memoPoints));
+    const PairMemo m = k < memo_.size() ? memo_[k] : PairMemo();
+    o.put(std::uint8_t(m.memo)), o.put(std::uint8_t(m.side)), o.put(std::uint8_t(m.held)), o.put(std::int32_t(m.memoPoints));
     for (int q = 0; q < 2; ++q) o.put(m.memoS[q]), o.put(m.memoT[q]), o.put(m.memoMeasure[q]), o.put(m.memoNormal[q]);
   }
   std::vector<PairCache> cache;
@@ -89,14 +87,13 @@ CollisionStage::Memory CollisionStage::parseMemory(const Fabric& f, const std::s
     x.fsA = in.get<Real>(), x.fsB = in.get<Real>(), x.apart = in.get<Real>();
   }
   const auto nk = in.count(2 * sizeof(Index));
-  m.keys.resize(nk), m.memo.resize(nk), m.remembered.resize(nk);
+  m.keys.resize(nk), m.memo.resize(nk);
   for (std::size_t k = 0; k < nk; ++k) {
     CPPair& p = m.keys[k];
     p.a = in.get<Index>(), p.b = in.get<Index>();
     if (p.a < 0 || p.b >= ne || !(p.a < p.b) || (k > 0 && !(m.keys[k - 1] < p))) in.fail("pairs out of range or order");
     PairMemo& q = m.memo[k];
-    m.remembered[k] = in.get<std::uint8_t>() != 0;
-    q.side = in.get<std::uint8_t>() != 0, q.held = in.get<std::uint8_t>() != 0;
+    q.memo = in.get<std::uint8_t>() != 0, q.side = in.get<std::uint8_t>() != 0, q.held = in.get<std::uint8_t>() != 0;
     q.memoPoints = in.get<std::int32_t>();
     if (q.memoPoints < 0 || q.memoPoints > 2) in.fail("a pair with more than two remembered points");
     for (int j = 0; j < 2; ++j) {
@@ -144,12 +141,7 @@ bool CollisionStage::setMemory(const Fabric& f, const std::string& bytes) {
   crossings_ = std::move(xs);
   cachePairs_ = std::move(m.keys);
   const bool gap = params_.model == ContactModel::Gap;
-  // The screens of the keys (never evaluated), each remembered pair's memory in a slot of its own.
-  if (gap) {
-    screen_.assign(cachePairs_.size(), PairScreen());
-    for (std::size_t k = 0; k < cachePairs_.size(); ++k)
-      if (m.remembered[k]) screen_[k].slot = keepMemo(m.memo[k]);
-  }
+  memo_ = gap ? std::move(m.memo) : std::vector<PairMemo>();
   cache_ = std::move(m.cache);
   cacheClock_ = m.cacheClock;
   sectionStamp_ = std::move(m.sectionStamp);

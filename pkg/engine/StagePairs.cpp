@@ -36,19 +36,18 @@ bool CollisionStage::reuse(const Fabric& f, std::size_t k, CPContact& c) const {
   return true;
 }
 
-// After a broad phase the cache (model Paper) or the screens (model Gap) follow their pairs (both
+// After a broad phase the cache (model Paper) or the memory (model Gap) follows its pairs (both
 // lists sorted): a pair kept keeps its entry. Only the one in use is kept: the contact cache entry
-// is ten times the screen's size. A screen not followed gives its memory's slot back.
+// is ten times the memory's size, and copying it for every pair was a share of the gap model's
+// narrow phase.
 void CollisionStage::remapCache(bool caching, bool gapModel) {
-  const auto follow = [&](auto& now, auto& old, bool used, std::vector<std::uint8_t>* kept) {
+  const auto follow = [&](auto& now, auto& old, bool used) {
     using Entry = typename std::decay_t<decltype(now)>::value_type;
     old.swap(now);
     now.resize(used ? pairs_.size() : 0);  // each entry written once below
     if (!used) return;
-    if (kept) kept->assign(old.size(), 0);
     // Fixed chunks of the new pairs, each starting its walk where the old list reaches its first
-    // pair (the serial walk's place there): the same entries for any thread count. An old pair is
-    // followed by one new pair at most (both lists hold each pair once).
+    // pair (the serial walk's place there): the same entries for any thread count.
     constexpr Index kChunk = 4096;
     const Index n = static_cast<Index>(pairs_.size());
     parallelFor(chunkCount(n, kChunk), 2, threads(), [&](Index t) {
@@ -57,29 +56,13 @@ void CollisionStage::remapCache(bool caching, bool gapModel) {
           std::lower_bound(cachePairs_.begin(), cachePairs_.end(), pairs_[k0]) - cachePairs_.begin());
       for (Index k = k0; k < k1; ++k) {
         while (o < cachePairs_.size() && cachePairs_[o] < pairs_[k]) ++o;
-        const bool found = o < cachePairs_.size() && cachePairs_[o] == pairs_[k] && o < old.size();
-        now[k] = found ? old[o] : Entry();
-        if (found && kept) (*kept)[o] = 1;
+        now[k] = o < cachePairs_.size() && cachePairs_[o] == pairs_[k] && o < old.size() ? old[o] : Entry();
       }
     });
   };
-  follow(cache_, cacheOld_, caching, nullptr);
-  follow(screen_, screenOld_, gapModel, &screenKept_);
-  if (gapModel)  // in old-pair order: the same free stack for any thread count
-    for (std::size_t o = 0; o < screenOld_.size(); ++o)
-      if (!screenKept_[o] && screenOld_[o].slot >= 0) freeMemo_.push_back(screenOld_[o].slot);
+  follow(cache_, cacheOld_, caching);
+  follow(memo_, memoOld_, gapModel);
   cachePairs_ = pairs_;
-}
-
-Index CollisionStage::keepMemo(const PairMemo& m) {
-  if (freeMemo_.empty()) {
-    memo_.push_back(m);
-    return static_cast<Index>(memo_.size()) - 1;
-  }
-  const Index slot = freeMemo_.back();
-  freeMemo_.pop_back();
-  memo_[slot] = m;
-  return slot;
 }
 
 void CollisionStage::narrow(const Fabric& f, Real dt) {
@@ -90,7 +73,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
                        params_.model == ContactModel::Paper;
   const bool gapModel = params_.model == ContactModel::Gap;
   if (cachePairs_.size() != pairs_.size() || pairsChanged_ || cache_.size() != (caching ? pairs_.size() : 0) ||
-      screen_.size() != (gapModel ? pairs_.size() : 0))
+      memo_.size() != (gapModel ? pairs_.size() : 0))
     remapCache(caching, gapModel);
   pairsChanged_ = false;
   if (gapModel) seedReturned(f);
@@ -117,19 +100,9 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
   const Index chunks = chunkCount(n, kPairChunk);
   slices_.resize(chunks);
   reused_.assign(chunks, 0);
-  forgotChunks_.resize(chunks);
-  madeChunks_.resize(chunks);
   parallelForDynamic(chunks, 4, threads(), [&](Index t) {
     std::vector<CPContact>& out = slices_[t];
     out.clear();
-    // The memories this chunk forgets and makes, given back and taken in chunk order after the
-    // loop (a slot belongs to one pair: the chunks write only their own pairs' memories).
-    std::vector<Index>& forgot = forgotChunks_[t];
-    std::vector<std::pair<Index, PairMemo>>& made = madeChunks_[t];
-    forgot.clear(), made.clear();
-    const auto forget = [&](PairScreen& sc) {
-      if (sc.slot >= 0) forgot.push_back(sc.slot), sc.slot = -1;
-    };
     CPContact c;
     for (Index k = t * kPairChunk, end = std::min(n, k + kPairChunk); k < end; ++k) {
       const CPPair& pr = pairs_[k];
@@ -141,7 +114,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
       }
       if (caching) cache_[k].valid = false;
       if (gapModel) {
-        PairScreen& pc = screen_[k];
+        PairMemo& pc = memo_[k];
         // The pair's gap functions; listed when they can close within the step (speculative
         // contacts: the row lets each close exactly its gap), bounded by the node speeds.
         const Index i = f.elem0[pr.a], j = f.elem0[pr.b];
@@ -152,7 +125,7 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         // wider), so it is skipped unmeasured, with the same outcome (the neighbours of a tight
         // weave lie 30-80 um apart, and most of a ply moves far less than that in a step).
         if (pc.clear - (odometer_[pr.a] + odometer_[pr.b] - pc.odometer) > reach) {
-          forget(pc);
+          if (pc.memo) pc.forget();
           continue;
         }
         // No section reaches beyond its major semi-axis: pairs whose axes are farther apart than
@@ -170,13 +143,10 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         if (axes.distance > 2 * widest + reach ||
             !obbOverlap(grown_[pr.a], grown_[pr.b],
                         closestMidpoint(f.pos[i], f.pos[i + 1], f.pos[j], f.pos[j + 1], axes))) {
-          forget(pc);  // as a pair the broad phase no longer lists: the contacts do not depend on its skin
+          if (pc.memo) pc.forget();  // as a pair the broad phase no longer lists: the contacts do not depend on its skin
           continue;
         }
-        PairMemo fresh;
-        const bool remembers = pc.slot >= 0;
-        PairMemo& pm = remembers ? memo_[pc.slot] : fresh;
-        bool side = sideBySide(f, pr.a, pr.b, remembers && pm.side, &chords_);
+        bool side = sideBySide(f, pr.a, pr.b, pc.memo && pc.side, &chords_);
         CPContact two[2];
         // The pair's memory (GapFunction.hpp): its normals by point (a side-by-side pair's two
         // points are the ends of the shared part; one point that becomes two starts both from it,
@@ -185,8 +155,8 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         // parted since, or a point far from the last ones) may claim no more than its
         // half-thicknesses where that overlaps: its sections are taken as turned the way that fits,
         // as a remembered pair's would have turned.
-        const Vec3 orient[2] = {pm.memoNormal[0], pm.memoNormal[pm.memoPoints == 2 ? 1 : 0]};
-        const int m = pairGaps(f, pr.a, pr.b, side, params_.rule, remembers ? orient : nullptr, two, &tangent_, &axes,
+        const Vec3 orient[2] = {pc.memoNormal[0], pc.memoNormal[pc.memoPoints == 2 ? 1 : 0]};
+        const int m = pairGaps(f, pr.a, pr.b, side, params_.rule, pc.memo ? orient : nullptr, two, &tangent_, &axes,
                              &chords_);
         // A point's memory is the last step's point nearest to it along the two axes, if that lay
         // within a quarter of the two sections' radii (67 um in KM2 706, about half the yarn
@@ -198,20 +168,19 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
         const Real reachMemo = 0.25 * (f.secRadius[i] + f.secRadius[j]);
         for (int q = 0; q < m; ++q) {
           Real remembered = NAN, nearest = reachMemo;
-          for (int p = 0; p < pm.memoPoints; ++p) {
-            const Real apart = std::abs(pm.memoS[p] - two[q].sA) * lenA + std::abs(pm.memoT[p] - two[q].sB) * lenB;
-            if (apart <= nearest) nearest = apart, remembered = pm.memoMeasure[p];
+          for (int p = 0; p < pc.memoPoints; ++p) {
+            const Real apart = std::abs(pc.memoS[p] - two[q].sA) * lenA + std::abs(pc.memoT[p] - two[q].sB) * lenB;
+            if (apart <= nearest) nearest = apart, remembered = pc.memoMeasure[p];
           }
           if (std::isnan(remembered))
-            remembered = pm.held ? 0.0
+            remembered = pc.held ? 0.0
                                  : semiAxesAt(f, pr.a, two[q].sA, params_.rule).b + semiAxesAt(f, pr.b, two[q].sB, params_.rule).b;
           capMeasure(two[q], remembered);
         }
-        pm.side = side, pm.memoPoints = m, pm.held = false;
+        pc.memo = true, pc.side = side, pc.memoPoints = m, pc.held = false;
         for (int q = 0; q < m; ++q)
-          pm.memoS[q] = two[q].sA, pm.memoT[q] = two[q].sB, pm.memoNormal[q] = two[q].normal,
-          pm.memoMeasure[q] = two[q].hA + two[q].hB;
-        if (!remembers) made.emplace_back(k, pm);
+          pc.memoS[q] = two[q].sA, pc.memoT[q] = two[q].sB, pc.memoNormal[q] = two[q].normal,
+          pc.memoMeasure[q] = two[q].hA + two[q].hB;
         for (int q = 0; q < m; ++q)
           if (two[q].gap <= reach) out.push_back(two[q]);
         continue;
@@ -235,11 +204,6 @@ void CollisionStage::narrow(const Fabric& f, Real dt) {
     }
   });
   joinChunks(slices_, contacts_, threads());
-  if (gapModel) {  // the slots given back, then taken, in chunk order (the same pool for any thread count)
-    for (Index t = 0; t < chunks; ++t) freeMemo_.insert(freeMemo_.end(), forgotChunks_[t].begin(), forgotChunks_[t].end());
-    for (Index t = 0; t < chunks; ++t)
-      for (const auto& [k, m] : madeChunks_[t]) screen_[k].slot = keepMemo(m);
-  }
   stats.cached = 0;
   for (Index t = 0; t < chunks; ++t) stats.cached += reused_[t];
 }
