@@ -51,6 +51,15 @@ int CrossingContacts::usable(const Fabric& f, const Vec3Array& chord, Index e, R
   return why;
 }
 
+// Whether tracking would keep a crossing whose place q slid into the CP beside it, on the side of
+// the node q lies nearer to (none at a yarn's end).
+bool CrossingContacts::usableBeside(const Fabric& f, const Vec3Array& chord, const YarnPlace& q) {
+  const Yarn& y = f.yarns[f.elemYarn[q.cp]];
+  const Index e = q.s < 0.5 ? q.cp - 1 : q.cp + 1;
+  if (e < y.firstElem || e >= y.firstElem + y.nElems) return true;
+  return usable(f, chord, e, kKinkCos) == 0;
+}
+
 // Whether the footprint's CPs [lo, hi] of a yarn still are the piece its crossing stands for: 0 when
 // all are alive and none turns from the point's CP e by more than the angle of cosine kFoldCos; else
 // Break or Kink. The footprint hides its pairs from the general pipeline, so another close approach
@@ -210,6 +219,11 @@ bool CrossingContacts::form(const Fabric& f, const std::vector<CPContact>& conta
     canonical(f, x.a), canonical(f, x.b);
     if (foot_.covers(x.a.cp, x.b.cp) || std::abs(chord[x.a.cp].dot(chord[x.b.cp])) > kFormCos) continue;
     if (usable(f, chord, x.a.cp, kFormKinkCos) || usable(f, chord, x.b.cp, kFormKinkCos)) continue;
+    // Nor next to a CP tracking would hand it back on: a place near a node slides into the CP
+    // beyond it within a step or two, and a crossing formed beside a kinked CP was formed and handed
+    // back at every step (traced at 4 CPs per span, 24 steps running, its chord pairs leaving and
+    // returning each time; docs/collisions.md).
+    if (!usableBeside(f, chord, x.a) || !usableBeside(f, chord, x.b)) continue;
     // The lines' points on the contact's side: else the general pipeline keeps the pair.
     CPContact g;
     crossingGap(f, x.a.cp, x.a.s, x.b.cp, x.b.s, p.rule, c.normal, g);

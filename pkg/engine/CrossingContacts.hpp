@@ -127,6 +127,7 @@ class CrossingContacts {
   void footprint(const Fabric& f, const Crossing& x, const ContactParams& p, Index& a0, Index& a1, Index& b0,
                  Index& b1) const;
   static int usable(const Fabric& f, const Vec3Array& chord, Index e, Real kinkCos);
+  static bool usableBeside(const Fabric& f, const Vec3Array& chord, const YarnPlace& q);
   static int whole(const Fabric& f, const Vec3Array& chord, Index lo, Index hi, Index e);
   void handBack(Index id, HandBack why, std::vector<std::uint8_t>& renew);
   // What track decides for one crossing: its new places and their lines' distance, a hand-back
