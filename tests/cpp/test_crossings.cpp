@@ -209,6 +209,38 @@ TEST(CrossingHandBack, Break) {
   EXPECT_EQ(r.handedBack(HandBack::Break), 1);
 }
 
+// Formation looks one CP on: a crossing whose place lies near a node beside a CP kinked beyond
+// kKinkDeg would be handed back as soon as tracking walks it there (traced at 4 CPs per span: a
+// crossing formed and handed back at every step), so the general pipeline keeps its pairs. Yarn A
+// straight through the place's CP and the one beyond, bent down by 40 degrees at the node before
+// the CP next to the place; the same yarns straight form the crossing.
+TEST(Crossings, NoneFormsBesideAKinkedCP) {
+  const auto run = [](Real bendDeg) {
+    Fabric f = twoYarns(0.12e-3 - 1e-6, 0.01e-3);  // B over A at x = 10 um: A's CP 8 at s = 0.04
+    const Real c = std::cos(bendDeg * 3.14159265358979323846 / 180), s = std::sin(bendDeg * 3.14159265358979323846 / 180);
+    const Vec3 knee = f.pos[7];  // A's node 7: CP 7 (nodes 7, 8) straight on, CP 6 and before bent down
+    for (Index i = 0; i < 7; ++i) {
+      const Real back = knee.x() - f.pos[i].x();
+      f.pos[i] = Vec3(knee.x() - c * back, f.pos[i].y(), knee.z() - s * back);
+    }
+    FabricEngine e(f);
+    e.enableCollisions(ContactParams(), BroadPhase::Grid);
+    e.collisions()->settle(e.fabric());
+    for (Index i = 0; i < e.fabric().nNodes(); ++i) e.dynamics().fix(i);
+    const Real dt = 0.5 * e.criticalDt();
+    Real worst = 0;
+    for (int k = 0; k < 20; ++k) {
+      e.step(dt);
+      for (const CPContact& q : e.collisions()->contacts()) worst = std::max(worst, -q.gap);
+    }
+    return std::make_pair(e.collisions()->crossings().counts.formed, worst);
+  };
+  const auto straight = run(0), bent = run(40);
+  EXPECT_EQ(straight.first, 1) << "the straight yarns form their crossing once";
+  EXPECT_EQ(bent.first, 0) << "none formed beside the kinked CP (one formed without the rule)";
+  EXPECT_LE(bent.second, 1e-6) << "the chord pairs keep the yarns apart";
+}
+
 namespace {
 
 // A 13.4 mm KM2 ply of `cpPerSpan` CPs per span (ends clamped, sections settled) and a 3 mm, 1 g cube
