@@ -27,8 +27,9 @@
 //               closest approach moved elsewhere), or its footprint lands on another crossing of
 //               the same two yarns (a folded piece's two crossings met) or finds no room.
 // After the general narrow phase (form): a contact of two yarns' CPs that cross steeply (kFormDeg,
-// above kTurnDeg: hysteresis), whose chains turn by at most kFormKinkDeg there, whose CPs and
-// neighbours are alive and whose pair no crossing covers
+// above kTurnDeg: hysteresis), whose chains turn by at most kFormKinkDeg there and by at most
+// kKinkDeg at the CP beside each place (toward its nearer node: where tracking would walk it),
+// whose CPs and neighbours are alive and whose pair no crossing covers
 // forms a crossing at the lines' closest points near it, if they lie on the contact's side, its
 // measure memory holding its gap at the contact's where the lines read less: a built weave's
 // crossings at the first step, a crossing again once its yarns return. Its chord pairs' contacts
