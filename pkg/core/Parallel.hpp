@@ -140,6 +140,23 @@ inline void joinChunks(const std::vector<std::vector<T>>& parts, std::vector<T>&
   parallelFor(n, 2, nThreads, [&](Index t) { std::copy(parts[t].begin(), parts[t].end(), out.begin() + start[t]); });
 }
 
+/// The elements of `in` that keep(element) accepts, in order, into `out` (which may be `in`): fixed
+/// chunks of `chunk` elements filtered on the threads into `parts` (scratch kept between calls),
+/// then joined in chunk order (the same list at any thread count).
+template <class T, class Keep>
+inline void keepChunked(const std::vector<T>& in, std::vector<T>& out, Index chunk, std::vector<std::vector<T>>& parts,
+                        int nThreads, Keep&& keep) {
+  const Index n = static_cast<Index>(in.size());
+  parts.resize(static_cast<std::size_t>(chunkCount(n, chunk)));
+  parallelFor(static_cast<Index>(parts.size()), 2, nThreads, [&](Index t) {
+    std::vector<T>& kept = parts[t];
+    kept.clear();
+    for (Index k = t * chunk, end = std::min(n, k + chunk); k < end; ++k)
+      if (keep(in[k])) kept.push_back(in[k]);
+  });
+  joinChunks(parts, out, nThreads);
+}
+
 /// std::merge of the sorted lists a and b into out, on the threads: fixed chunks of a, each merged
 /// with the part of b that std::merge puts before the next chunk (the elements below the chunk's
 /// first, an element of a before an equal one of b), written at its place. The same list as

@@ -246,18 +246,8 @@ bool CrossingContacts::form(const Fabric& f, const std::vector<CPContact>& conta
   return any;
 }
 
-// By fixed chunks (threads), kept in order.
 void CrossingContacts::exclude(std::vector<CPPair>& pairs) {
-  constexpr Index kChunk = 8192;
-  const Index n = static_cast<Index>(pairs.size());
-  keptPairs_.resize(static_cast<std::size_t>(chunkCount(n, kChunk)));
-  parallelFor(static_cast<Index>(keptPairs_.size()), 1, threads(), [&](Index t) {
-    std::vector<CPPair>& kept = keptPairs_[t];
-    kept.clear();
-    for (Index k = t * kChunk, end = std::min(n, k + kChunk); k < end; ++k)
-      if (!foot_.covers(pairs[k].a, pairs[k].b)) kept.push_back(pairs[k]);
-  });
-  joinChunks(keptPairs_, pairs, threads());
+  keepChunked(pairs, pairs, 8192, keptPairs_, threads(), [&](const CPPair& q) { return !foot_.covers(q.a, q.b); });
 }
 
 void CrossingContacts::exclude(std::vector<CPContact>& contacts) const {

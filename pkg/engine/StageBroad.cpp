@@ -120,18 +120,10 @@ void CollisionStage::broad(const Fabric& f) {
       parallelFor(static_cast<Index>(grown_.size()), kParallelGrain, threads(), [&](Index e) {
         if (renewed(e)) skinBoxes_[e] = skinBox(f, e);
       });
-      // The pairs between two CPs kept, by fixed chunks (threads) joined in order; merged with the
+      // The pairs between two CPs kept (by fixed chunks on the threads, in order); merged with the
       // fresh ones (both sorted) on the threads.
-      constexpr Index kChunk = 8192;
-      const Index n = static_cast<Index>(pairs_.size());
-      keptChunks_.resize(chunkCount(n, kChunk));
-      parallelFor(static_cast<Index>(keptChunks_.size()), 2, threads(), [&](Index t) {
-        std::vector<CPPair>& out = keptChunks_[t];
-        out.clear();
-        for (Index k = t * kChunk, end = std::min(n, k + kChunk); k < end; ++k)
-          if (!renewed(pairs_[k].a) && !renewed(pairs_[k].b)) out.push_back(pairs_[k]);
-      });
-      joinChunks(keptChunks_, keptPairs_, threads());
+      keepChunked(pairs_, keptPairs_, 8192, keptChunks_, threads(),
+                  [&](const CPPair& q) { return !renewed(q.a) && !renewed(q.b); });
       if (byYarn) tree.collide(f, skinBoxes_, filter_, freshPairs_, &dirtyYarn_);
       else grid.collide(f, skinBoxes_, filter_, freshPairs_, &outside_);
       parallelMerge(keptPairs_, freshPairs_, pairs_, threads());
