@@ -142,11 +142,13 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
   // listing its pairs in CP order, joined in chunk order (the same list at any thread count). Each
   // CP meets the later CPs of its cells, or with `dirty` every CP but the earlier flagged ones (a
   // flagged pair once, from its lower CP): a pair (j, i) with j < i is then listed from i, and the
-  // list is sorted at the end.
+  // list is sorted at the end. The joined list is in CP order whatever the chunks, so their size
+  // only spreads the work: a partial call looks for a few hundred CPs (~4 us each), and chunks of
+  // 1024 kept them on one thread (the default impact's broad phase 1.2x on 2 threads).
   const auto flagged = [dirty](Index i) { return !dirty || (*dirty)[i]; };
   const Index looking = dirty ? static_cast<Index>(flagged_.size()) : n;
   const auto cp = [&](Index k) { return dirty ? flagged_[k] : k; };
-  constexpr Index kChunk = 1024;
+  const Index kChunk = dirty ? 32 : 1024;
   const Index chunks = chunkCount(looking, kChunk);
   chunkPairs_.resize(chunks);
   chunkTests_.assign(chunks, 0);
