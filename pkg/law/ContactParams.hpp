@@ -38,7 +38,8 @@ enum class SweepOrder : std::uint8_t {
   Sequential = 1,
   /// Block by block (law/RowBlocks: slabs of the ply whose rows share no node, solved at once, each
   /// in contact order), then the rows across the slabs' cuts and the body rows, in order: a barrier
-  /// per sweep instead of one per colour.
+  /// per phase instead of one per colour. Each block's rows have the sequential order's active set;
+  /// the cuts' and the tail's are updated every sweep.
   Blocked = 2
 };
 /// How the gap model measures where two yarns cross (docs/collisions.md, "Persistent crossings").

@@ -361,7 +361,6 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
   using Clock = std::chrono::steady_clock;
   const int nThreads = threads();
   miss_.resize(rows_.size());
-  const int colours = colours_;
   double seconds[2] = {0, 0};  // of the split sweep and of the one-thread sweep
   // Without friction between yarns the rows are swept packed (SweepRow; the rows on a body as they
   // are), their impulses copied back after.
@@ -376,27 +375,46 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
       q.n = r.n, q.normal = r.normal, q.target = r.target, q.invK = r.invK, q.lambda = r.lambda, q.body = r.body >= 0;
     });
   }
-  // The tail's active set (below): each node's tail rows (CSR), and a bit per tail row: it is to be
-  // updated (every row for the first sweep).
-  const Index tailStart = start_[RowColouring::kColours], tailRows = nRows - tailStart;
+  // The active set (below). Its rows: the serial tail's (sequential and coloured orders), or the
+  // blocks' (blocked order; the cuts' and the tail's rows are then updated every sweep). Each of its
+  // regions (the tail, or a block) has its own words of the bit sets, so the threads that solve the
+  // blocks at once, or the cuts of a phase (each cut wakes only the two blocks beside it), never
+  // write the same word.
+  const Index tailStart = start_[RowColouring::kColours];
+  const bool blocked = blocks_ > 0;
+  const int regions = blocked ? blocks_ : 1;
+  Index tracked = 0;  // rows in the active set
+  {
+    Index bits = 0;
+    for (int g = 0; g < regions; ++g) {
+      const Index r0 = blocked ? start_[g] : tailStart, r1 = blocked ? start_[g + 1] : nRows;
+      region_[g] = {r0, r1, bits};
+      bits += (r1 - r0 + 63) / 64 * 64;
+      tracked += r1 - r0;
+    }
+    bitCount_ = bits;
+  }
   const auto nodesOfRow = [&](Index k, const Index*& node) {
     if (packed && !packed_[k].body) return node = packed_[k].node, packed_[k].n;
     return node = rows_[k].node, rows_[k].n;
   };
+  // Each node's rows of the active set (CSR, as bits), in bit order.
   nodeStart_.assign(f.pos.size() + 1, 0);
-  for (Index k = tailStart; k < nRows; ++k) {
-    const Index* node;
-    for (int q = 0, n = nodesOfRow(k, node); q < n; ++q) ++nodeStart_[node[q] + 1];
-  }
+  for (int g = 0; g < regions; ++g)
+    for (Index k = region_[g].row0; k < region_[g].row1; ++k) {
+      const Index* node;
+      for (int q = 0, n = nodesOfRow(k, node); q < n; ++q) ++nodeStart_[node[q] + 1];
+    }
   for (std::size_t i = 1; i < nodeStart_.size(); ++i) nodeStart_[i] += nodeStart_[i - 1];
   nodeRows_.resize(static_cast<std::size_t>(nodeStart_.back()));
   fill_.assign(nodeStart_.begin(), nodeStart_.end() - 1);
-  for (Index k = tailStart; k < nRows; ++k) {
-    const Index* node;
-    for (int q = 0, n = nodesOfRow(k, node); q < n; ++q) nodeRows_[fill_[node[q]]++] = k - tailStart;
-  }
-  // The same lists as words of the tail's bit sets: each node's rows (listed in order) grouped by
-  // their 64-row word, an OR mask per word. An update wakes its nodes' rows a word at a time (one
+  for (int g = 0; g < regions; ++g)
+    for (Index k = region_[g].row0; k < region_[g].row1; ++k) {
+      const Index* node;
+      for (int q = 0, n = nodesOfRow(k, node); q < n; ++q) nodeRows_[fill_[node[q]]++] = region_[g].bit0 + k - region_[g].row0;
+    }
+  // The same lists as words of the bit sets: each node's rows (listed in order) grouped by their
+  // 64-row word, an OR mask per word. An update wakes its nodes' rows a word at a time (one
   // read-modify-write of a set per word, where one per row was a third of the sweeps' time: stores
   // to one word in a chain).
   wordStart_.resize(nodeStart_.size());
@@ -412,32 +430,104 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
   wordStart_.back() = static_cast<Index>(words_.size());
   // The tail's rows on a body (updated every sweep), once rather than a scan of the tail per sweep.
   tailBodies_.clear();
-  for (Index k = tailStart; k < nRows; ++k)
-    if (packed ? packed_[k].body : rows_[k].body >= 0) tailBodies_.push_back(k - tailStart);
-  dirty_.assign(static_cast<std::size_t>((tailRows + 63) / 64), ~std::uint64_t(0));
-  if (tailRows % 64) dirty_.back() = (std::uint64_t(1) << (tailRows % 64)) - 1;
+  if (!blocked)
+    for (Index k = tailStart; k < nRows; ++k)
+      if (packed ? packed_[k].body : rows_[k].body >= 0) tailBodies_.push_back(k - tailStart);
+  // Every row of the active set to be updated in the first sweep (the words' padding never).
+  dirty_.assign(static_cast<std::size_t>(bitCount_ / 64), 0);
+  for (int g = 0; g < regions; ++g) {
+    const Region& q = region_[g];
+    for (Index j = 0; j < q.row1 - q.row0; ++j) dirty_[(q.bit0 + j) >> 6] |= std::uint64_t(1) << ((q.bit0 + j) & 63);
+  }
+  next_.assign(dirty_.size(), 0);
   skipped_ = 0;
-  std::fill(miss_.begin() + tailStart, miss_.end(), Real(0));
+  std::fill(miss_.begin(), miss_.end(), Real(0));
+  // One update of row k; true when it changed the row's impulse by more than the wake threshold.
+  // An update that moved the row's velocity by less than the tolerance (kWake) wakes none of its
+  // neighbours: it moves theirs by less (a node's share of it), and they stay within the tolerance
+  // unless several such updates add up (the final misses are measured, not assumed).
+  const auto update = [&](Index k) {
+    const bool onBody = packed ? packed_[k].body : rows_[k].body >= 0;
+    const bool fast = packed && !onBody;
+    const Real before = fast ? packed_[k].lambda : rows_[k].lambda;
+    const Vec3 beforeT = packed ? Vec3::Zero() : rows_[k].lambdaT;
+    miss_[k] = fast ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
+    const Real dLambda = std::abs((fast ? packed_[k].lambda : rows_[k].lambda) - before);
+    const Real invK = fast ? packed_[k].invK : rows_[k].invK;
+    return dLambda > kWake * solverTol_ * invK ||
+           (!packed && (rows_[k].lambdaT - beforeT).norm() > kWake * solverTol_ * invK);
+  };
+  // Row k's update woke the active set's rows of its nodes: with `own` its bit (a row of the set),
+  // the later ones in this sweep and the earlier ones in the next; without (-1: a cut's or the tail's
+  // row beside the blocks, which come first in a sweep), all in the next.
+  const auto wake = [&](Index k, Index own) {
+    const Index ownWord = own >= 0 ? own >> 6 : -1;
+    const std::uint64_t ownBit = own >= 0 ? std::uint64_t(1) << (own & 63) : 0, earlier = ownBit - 1,
+                        later = ~(earlier | ownBit);
+    const Index* node;
+    for (int q = 0, n = nodesOfRow(k, node); q < n; ++q)
+      for (Index j = wordStart_[node[q]]; j < wordStart_[node[q] + 1]; ++j) {
+        const Index w = words_[j];
+        const std::uint64_t m = masks_[j];
+        if (own < 0 || w < ownWord) next_[w] |= m;
+        else if (w > ownWord) dirty_[w] |= m;
+        else dirty_[w] |= m & later, next_[w] |= m & earlier;
+      }
+  };
+  // The rows of region g marked in dirty_ (cleared as taken), in order: updated, their misses'
+  // largest into *worst; returns how many.
+  const auto sweepRegion = [&](int g, Real& worst, bool& wroteAny) {
+    const Region& q = region_[g];
+    Index updated = 0;
+    for (Index word = q.bit0 >> 6, end = (q.bit0 + q.row1 - q.row0 + 63) >> 6; word < end; ++word)
+      while (dirty_[word]) {
+        const int bit = __builtin_ctzll(dirty_[word]);
+        dirty_[word] &= dirty_[word] - 1;
+        const Index own = word * 64 + bit, k = q.row0 + own - q.bit0;
+        ++updated;
+        if (update(k)) wake(k, own), wroteAny = true;
+        worst = std::max(worst, miss_[k]);
+      }
+    return updated;
+  };
   int sweeps = p.maxIterations;
   for (int it = 0; it < p.maxIterations; ++it) {
     const bool split = nThreads > 1 && (it == 0 || (it > 1 && seconds[0] <= seconds[1]));
     const auto t0 = Clock::now();
+    // The active set: a row no other row has changed a node of since its own last update would only
+    // repeat it (its miss was taken to its target, or it separates): it is skipped, its miss 0. An
+    // update that changes velocities marks the rows of its nodes (those after it in this sweep,
+    // those before in the next); the rows on a body (they share its velocities) are updated every
+    // sweep.
+    if (it > 0) {
+      dirty_.swap(next_);
+      for (const Index r : tailBodies_) dirty_[r >> 6] |= std::uint64_t(1) << (r & 63);
+      std::fill(next_.begin(), next_.end(), 0);
+    }
+    Index updated = 0;
+    bool wroteAny = false;
     // Blocks, then the rows across the even cuts, then the odd cuts': the groups of a phase each on
-    // a thread, its rows in order (law/RowBlocks).
-    // Each group's largest miss kept by its thread (a maximum: the same in any order).
+    // a thread, its rows in order (law/RowBlocks); a block's rows from the active set, the cuts'
+    // every one. Each group's largest miss, update count and wake kept by its thread (a maximum, a
+    // sum, an or: the same in any order).
     Real groupWorst[RowBlocks::kSeam] = {};
-    for (int phase = 0; blocks_ > 0 && phase < RowBlocks::kPhases; ++phase) {
+    Index groupUpdated[RowBlocks::kSeam] = {};
+    bool groupWrote[RowBlocks::kSeam] = {};
+    for (int phase = 0; blocked && phase < RowBlocks::kPhases; ++phase) {
       const int g0 = RowBlocks::phaseBegin(phase);
       parallelFor(RowBlocks::phaseBegin(phase + 1) - g0, 1, split ? nThreads : 1, [&](Index q) {
-        Real worst = 0;
-        for (Index k = start_[g0 + q]; k < start_[g0 + q + 1]; ++k) {
-          miss_[k] = packed ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
-          worst = std::max(worst, miss_[k]);
+        const int g = g0 + static_cast<int>(q);
+        if (phase == 0) {
+          groupUpdated[g] = sweepRegion(g, groupWorst[g], groupWrote[g]);
+          return;
         }
-        groupWorst[g0 + q] = worst;
+        for (Index k = start_[g]; k < start_[g + 1]; ++k) {
+          if (update(k)) wake(k, -1), groupWrote[g] = true;
+          groupWorst[g] = std::max(groupWorst[g], miss_[k]);
+        }
       });
     }
-    for (int c = 0; c < colours; ++c) {
+    for (int c = 0; c < colours_; ++c) {
       const Index b = start_[c];
       if (packed)
         parallelFor(start_[c + 1] - b, kRowGrain, split ? nThreads : 1,
@@ -447,57 +537,23 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
                     [&](Index k) { miss_[b + k] = solveRow(f, rows_[b + k], p, friction); });
     }
     if (it < 2) seconds[it] = std::chrono::duration<double>(Clock::now() - t0).count();
-    const Index tail = start_[RowColouring::kColours];
     Real worst = 0;
-    if (blocks_ > 0)
-      for (Real w : groupWorst) worst = std::max(worst, w);
-    else
-      for (Index k = 0; k < tail; ++k) worst = std::max(worst, miss_[k]);  // the colours' rows
-    // The serial order's active set: a row no other row has changed a node of since its own last
-    // update would only repeat it (its miss was taken to its target, or it separates): it is
-    // skipped, its miss 0. An update that changes velocities marks the rows of its nodes (those
-    // after it in this sweep, those before in the next); rows on a body (they share its
-    // velocities) are updated every sweep.
-    if (it > 0) {
-      dirty_.swap(next_);
-      for (const Index r : tailBodies_) dirty_[r >> 6] |= std::uint64_t(1) << (r & 63);
-    }
-    next_.assign(dirty_.size(), 0);
-    Index updated = 0;
-    for (std::size_t word = 0; word < dirty_.size(); ++word)
-      while (dirty_[word]) {
-        const int bit = __builtin_ctzll(dirty_[word]);
-        dirty_[word] &= dirty_[word] - 1;
-        const Index k = tailStart + static_cast<Index>(word * 64 + bit);
-        ++updated;
-        const bool onBody = packed ? packed_[k].body : rows_[k].body >= 0;
-        const Real before = packed && !onBody ? packed_[k].lambda : rows_[k].lambda;
-        const Vec3 beforeT = packed ? Vec3::Zero() : rows_[k].lambdaT;
-        miss_[k] = packed && !onBody ? solveRow(f, packed_[k]) : solveRow(f, rows_[k], p, friction);
+    if (blocked) {
+      for (int g = 0; g < RowBlocks::kSeam; ++g)
+        worst = std::max(worst, groupWorst[g]), updated += g < blocks_ ? groupUpdated[g] : 0, wroteAny |= groupWrote[g];
+      // The tail (the seam, then the rows on a body), every row, in order.
+      for (Index k = tailStart; k < nRows; ++k) {
+        if (update(k)) wake(k, -1), wroteAny = true;
         worst = std::max(worst, miss_[k]);
-        // An update that moved the row's velocity by less than a tenth of the tolerance wakes none of
-        // its neighbours: it moves theirs by less (a node's share of it), and they stay within the
-        // tolerance unless ten such updates add up (the final misses are measured, not assumed).
-        const Real dLambda = std::abs((packed && !onBody ? packed_[k].lambda : rows_[k].lambda) - before);
-        const Real invK = packed && !onBody ? packed_[k].invK : rows_[k].invK;
-        const bool wrote = dLambda > kWake * solverTol_ * invK ||
-                           (!packed && (rows_[k].lambdaT - beforeT).norm() > kWake * solverTol_ * invK);
-        if (!wrote) continue;
-        // Its nodes' other rows: the later ones in this sweep, the earlier ones in the next.
-        const Index own = k - tailStart, ownWord = own >> 6;
-        const std::uint64_t ownBit = std::uint64_t(1) << (own & 63), earlier = ownBit - 1, later = ~(earlier | ownBit);
-        const Index* node;
-        for (int q = 0, n = nodesOfRow(k, node); q < n; ++q)
-          for (Index j = wordStart_[node[q]]; j < wordStart_[node[q] + 1]; ++j) {
-            const Index w = words_[j];
-            const std::uint64_t m = masks_[j];
-            if (w > ownWord) dirty_[w] |= m;
-            else if (w < ownWord) next_[w] |= m;
-            else dirty_[w] |= m & later, next_[w] |= m & earlier;
-          }
       }
-    skipped_ += tailRows - updated;
-    if (tail < nRows && updated == 0) {  // nothing left to update: every row as its last update left it
+    } else {
+      for (Index k = 0; k < tailStart; ++k) worst = std::max(worst, miss_[k]);  // the colours' rows
+      updated = sweepRegion(0, worst, wroteAny);
+    }
+    skipped_ += tracked - updated;
+    // Nothing left to update: every row as its last update left it (sequential and coloured: no
+    // row of the tail was marked; blocked: no update in the sweep woke a row).
+    if ((!blocked && tailStart < nRows && updated == 0) || (blocked && !wroteAny)) {
       sweeps = it + 1;
       break;
     }

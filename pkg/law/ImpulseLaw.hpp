@@ -75,8 +75,9 @@ class ImpulseLaw {
  public:
   /// Rows of a colour below which it is solved on one thread (a parallel region costs a few us).
   static constexpr Index kRowGrain = 256;
-  /// The sweeps' active set (sequential order): an update that changes its row's velocity by more
-  /// than this fraction of the solve's tolerance has the rows of its nodes updated again.
+  /// The sweeps' active set (the serial tail's rows; the blocks' in the blocked order): an update
+  /// that changes its row's velocity by more than this fraction of the solve's tolerance has the
+  /// rows of its nodes updated again.
   static constexpr Real kWake = 1;
 
   /// What flattening can still take along a contact's normal (both CPs) [m]; asked only for contacts
@@ -180,7 +181,14 @@ class ImpulseLaw {
   Real dt_ = 0;
   std::vector<Index> touched_;
   std::vector<std::uint8_t> marked_;
-  // The serial tail's active set (solve): each node's tail rows (CSR) and a bit per tail row to update.
+  // The active set (solve): the serial tail's rows, or the blocks' (SweepOrder::Blocked), in
+  // regions (the tail, or a block each) whose bits start on a word of their own.
+  struct Region {
+    Index row0, row1, bit0;  // rows_[row0, row1), their bits from bit0
+  };
+  Region region_[RowBlocks::kBlocks] = {};
+  Index bitCount_ = 0;  // bits of the sets (each region's rounded up to a word)
+  // Each node's rows of the active set (CSR, as bits) and a bit per row to update.
   std::vector<Index> nodeStart_, nodeRows_, fill_;
   std::vector<Index> wordStart_, words_;  // per node its tail rows' words of the bit sets (CSR) ...
   std::vector<std::uint64_t> masks_;      // ... and each word's rows
