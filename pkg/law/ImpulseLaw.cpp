@@ -475,7 +475,7 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
       }
   };
   // The rows of region g marked in dirty_ (cleared as taken), in order: updated, their misses'
-  // largest into *worst; returns how many.
+  // largest into worst, whether an update woke a row into wroteAny; returns how many.
   const auto sweepRegion = [&](int g, Real& worst, bool& wroteAny) {
     const Region& q = region_[g];
     Index updated = 0;
