@@ -2,7 +2,7 @@
 // scripts/ballistic.py's scene built from the C++ core: a KM2 706
 // ply clamped on its four edges, breakage on, struck at its centre by a rigid cube (shape/RigidBody:
 // 5.59 mm, 1.1 g, 200 m/s, 50 um above the ply), the scene's contact settings (grid broad phase, skin
-// 40 um, one flattening pass, 10 sweeps). Prints the time by phase of the collision stage, the
+// 40 um, one flattening pass, 20 sweeps: scripts/ballistic.py's). Prints the time by phase of the collision stage, the
 // CP-step rate against the springs alone (the same ply, collisions and breakage off, the fastest of
 // three runs, in this process), the solve's figures and the run's outcome; with several thread counts
 // the speed-up of each against one thread beside an ideal loop's (core/ThreadCeiling.hpp), and
@@ -17,7 +17,7 @@
 //     scene=impact|tension   yarns=100 (tension: per family, even)   steps=0 (N > 0: N steps instead of t_end)
 //     warmup=-1 (untimed steps first; -1: 0 for impact, 2 for tension)   sweep_order=default|sequential|coloured|blocked
 //     side=0.0508 [m]   cp=1 (CPs per span)   t_end=1e-4 [s]   V=200 [m/s]   crossings=persistent|chords   skin=4e-5 [m]
-//     threads=1 (comma-separated counts, e.g. 1,2,4,8,16)   sweeps=10   out=FILE (JSON of the figures)
+//     threads=1 (comma-separated counts, e.g. 1,2,4,8,16)   sweeps=20   out=FILE (JSON of the figures)
 //     baseline=1 (0: no springs-alone runs; for instruction counts of the coupled run alone)
 //     every=0 (N > 0: a line every N steps with the wall time per step and the counts then)
 // The step is FabricEngine::step (the engine adapter's work without YADE's own). Built with
@@ -45,7 +45,7 @@ namespace {
 
 struct Options {
   Real side = 0.0508, tEnd = 1e-4, V = 200, safety = 0.7, skin = 4e-5;
-  int cp = 1, sweeps = 10;
+  int cp = 1, sweeps = 20;
   bool baseline = true;
   int every = 0;
   std::string scene = "impact", sweepOrder = "default";
