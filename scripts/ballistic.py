@@ -67,7 +67,7 @@ defaults.update({
     # Measured on the default scene over 20 us (docs/ballistic.md): absorbed energy within 0.2 % of
     # the tension scene's contact settings (4 passes, 50 sweeps, 5 um skin), at 0.6x the wall time.
     'flatten_passes': (1, '', CONTACT_KEYS['flatten_passes'][2]),
-    'max_iterations': (20, '', CONTACT_KEYS['max_iterations'][2] + '; a pack takes 10 per ply (at least this many) unless given'),
+    'max_iterations': (woven.pack.PLY_SWEEPS, '', CONTACT_KEYS['max_iterations'][2] + '; a pack takes 10 per ply (at least this many) unless given'),
     'skin': (4e-5, 'm', CONTACT_KEYS['skin'][2]),
     # Same pairs as the tree; 100 us of the default scene in 69 s against 84 s (bench_ballistic.py).
     'broad_phase': ('grid', '', CONTACT_KEYS['broad_phase'][2]),
@@ -225,7 +225,7 @@ if p.plies > 1 and 'max_iterations' not in p.given:
     # between the projectile and the last ply: 10 sweeps per ply (docs/ballistic.md; 4 plies at 10
     # sweeps let the projectile 0.48 thickness into the yarns and the projection put in 6 % of KE0),
     # and never fewer than the single ply's.
-    contact_args['max_iterations'] = max(p.max_iterations, woven.pack.sweeps_for(p.plies))
+    contact_args['max_iterations'] = woven.pack.sweeps_for(p.plies, at_least=p.max_iterations)
 ply = woven.ballistic.build_ply(weave_args, contact_args, side=p.side,
                                 clamp=p.clamp, state=p.state,
                                 breakage=dict(strain=p.break_strain, filter_length=p.break_filter,

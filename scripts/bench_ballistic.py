@@ -66,13 +66,13 @@ if p.threads > 1 and woven.openmp_threads() < p.threads:
 weave_args = {'preset': 'km2_706', 'nx': 0, 'ny': 0, 'cp_per_span': p.cp_per_span}
 # The scene's contact settings (scripts/ballistic.py)
 contact_args = {k: v[0] for k, v in CONTACT_KEYS.items()}
-contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=20, skin=4e-5, broad_phase=p.broad_phase)
+contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=woven.pack.PLY_SWEEPS, skin=4e-5, broad_phase=p.broad_phase)
 if p.sweep_order:
     contact_args['sweep_order'] = p.sweep_order
 elif p.threads > 1:  # both coupled runs in an order whose sweeps use the threads (docs/design.md, Threads)
     contact_args['sweep_order'] = 'blocked'
 if p.plies > 1:  # the scene's sweeps for a pack (scripts/ballistic.py)
-    contact_args['max_iterations'] = max(20, woven.pack.sweeps_for(p.plies))
+    contact_args['max_iterations'] = woven.pack.sweeps_for(p.plies)
 
 # 1. baseline: springs and integration of the same ply, collisions off
 O.engines = []

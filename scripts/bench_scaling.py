@@ -17,6 +17,7 @@ import time
 import numpy as np
 import woven
 import woven.ballistic
+import woven.pack
 from woven.contact import CONTACT_KEYS
 from woven.output import out_dir, savefig, write_csv, write_summary
 from woven.params import read_params
@@ -44,7 +45,7 @@ d = out_dir('bench_scaling', p)
 weave_args = {'preset': 'km2_706', 'nx': 0, 'ny': 0, 'cp_per_span': 1}
 contact_args = {k: v[0] for k, v in CONTACT_KEYS.items()}
 # The ballistic scene's contact settings (scripts/ballistic.py), for both scenes.
-contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=20, skin=4e-5, broad_phase='grid')
+contact_args.update(position_correction=0.0, flatten_passes=1, max_iterations=woven.pack.PLY_SWEEPS, skin=4e-5, broad_phase='grid')
 DEFAULT_CPS, DEFAULT_SIDE = 9384, 0.0508  # the default ply: 50.8 mm at one CP per crossing
 woven.set_threads(1)
 

@@ -37,6 +37,7 @@ def test_two_ply_pack_starts_apart_and_its_books_sum_to_the_total(tmp_path):
     assert pk['start']['overlap'] <= 1e-9
     assert s['checks']['pack_built_apart']['passed']
     assert [b['angle'] for b in pk['per_ply']] == [0.0, 45.0]
+    assert m['max_iterations'] == 20  # 10 per ply, and the single ply's 20
     # The per-ply books add up to the engine's kinetic, elastic and released entries.
     E = m['energy']
     books = pk['per_ply']
@@ -50,6 +51,13 @@ def test_two_ply_pack_starts_apart_and_its_books_sum_to_the_total(tmp_path):
     assert m['overlap']['yarn_max_before_break_rel'] <= 0.1 and m['overlap']['body_max_before_break_rel'] <= 0.1
     assert abs(m['energy_balance_error']) <= 0.01
     assert m['projectile']['mass'] == pytest.approx(7850 * math.pi * 2.794e-3 ** 2 * 5.588e-3, rel=1e-12)
+
+
+def test_pack_sweeps_are_ten_per_ply_never_fewer_than_the_single_plys():
+    import woven.pack as K
+    assert K.sweeps_for(1) == K.PLY_SWEEPS == 20
+    assert [K.sweeps_for(n) for n in (2, 3, 4, 8)] == [20, 30, 40, 80]
+    assert K.sweeps_for(4, at_least=50) == 50 and K.sweeps_for(4, per_ply=5, at_least=1) == 20
 
 
 def test_cylinder_mass_and_inertia_match_the_closed_form():
