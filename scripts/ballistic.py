@@ -22,7 +22,7 @@ import time
 import numpy as np
 import woven
 from woven.output import savetxt, atomic_open, atomic_path, savefig
-from woven.params import read_params
+from woven.params import check_steps, read_params
 from woven.energy_guard import EnergyGuard
 from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS
@@ -244,8 +244,10 @@ O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
 eng.substeps = p.substeps
 eng.multirate = bool(p.multirate)
 woven.attach(eng, set_dt=True, safety=p.safety)
+check_steps(p.t_end, O.dt, 'safety', p.safety, 't_end')
 every = max(1, int(math.ceil(p.t_end / O.dt)) // p.samples)
 guard = EnergyGuard(eng, p.energy_guard, p.guard_safety or 0.5 * p.safety)
+check_steps(p.t_end, guard.smallest_dt(), 'guard_safety', p.guard_safety or 0.5 * p.safety, 't_end once the energy guard acts')
 steps_max = int(math.ceil(p.t_end / guard.smallest_dt()))  # the run stops at t_end (watch)
 KE0 = 0.5 * mass * p.V ** 2
 E0 = eng.energy()

@@ -25,7 +25,7 @@ import time
 
 import numpy as np
 import woven
-from woven.params import read_params
+from woven.params import check_steps, read_params
 from woven.output import out_dir, savefig, savetxt, write_summary
 from woven.weave import WEAVE_KEYS
 from woven.contact import CONTACT_KEYS
@@ -137,6 +137,7 @@ if p.back_tension > 0:
 O.engines = []
 woven.attach(eng, set_dt=True, safety=p.safety)
 dt = O.dt
+check_steps(p.settle + p.pull / p.velocity * (1 + 0.5 * p.ramp), dt, 'safety', p.safety, 'the settling and the pull')
 n_settle = max(1, int(math.ceil(p.settle / dt)))
 n_pull = max(1, int(math.ceil(p.pull / p.velocity / dt + 0.5 * p.ramp * p.pull / p.velocity / dt)))
 n_ramp = int(p.ramp * n_pull)

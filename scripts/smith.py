@@ -12,7 +12,7 @@ import sys
 import numpy as np
 import woven
 from woven.output import savetxt, atomic_open, savefig
-from woven.params import read_params
+from woven.params import check_steps, read_params
 from woven.output import out_dir, write_summary
 
 p = read_params({
@@ -103,6 +103,7 @@ def run(n):
     eng.prescribe_velocity(mid, Vector3(0, p.V, 0))
     O.engines = []
     woven.attach(eng, set_dt=True, safety=p.safety)
+    check_steps(t_end, O.dt, 'safety', p.safety)
     steps = int(math.ceil(t_end / O.dt))
     X0 = woven.positions(eng).copy()
     O.run(steps // 2, True)
@@ -140,6 +141,7 @@ def run_grid(eng, n, mid, t_end):
     b.state.blockedDOFs = 'xyzXYZ'
     b.state.vel = Vector3(0, p.V, 0)
     O.dt = g.stable_dt(p.safety, extra_contacts=0)
+    check_steps(t_end, O.dt, 'safety', p.safety)
     steps = int(math.ceil(t_end / O.dt))
     # energy books: the driver's work on the struck node, W = sum of -F_bonds . V dt (F_bonds the
     # force the two bonds put on it, read after NewtonIntegrator, before the next ForceResetter),

@@ -21,7 +21,7 @@ import numpy as np
 import woven
 from woven.contact import CONTACT_KEYS
 from woven.output import out_dir, savefig, savetxt, write_summary
-from woven.params import read_params
+from woven.params import check_steps, read_params
 from woven.weave import WEAVE_KEYS
 
 defaults = dict(WEAVE_KEYS)
@@ -104,6 +104,8 @@ def grips(v_warp, v_weft):
 
 O.engines = []
 woven.attach(eng, set_dt=True, safety=p.safety)
+for a in (0, 1):
+    check_steps((crimp[a] + p.pretension) * L[a] / p.pull_velocity, O.dt, 'safety', p.safety, 'the pull to the pretension')
 # The pull: both families to their built crimp + pretension at the same speed; the family with the
 # shorter way stops first (its grips held from then on).
 # The grips start over a tenth of the shorter pull (velocity_ramp), which costs them half the ramp's

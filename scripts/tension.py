@@ -15,7 +15,7 @@ import sys
 import numpy as np
 import woven
 from woven.output import savetxt, savefig
-from woven.params import read_params
+from woven.params import check_steps, read_params
 from woven.output import out_dir, write_summary
 from woven.weave import WEAVE_KEYS
 from woven.contact import CONTACT_KEYS
@@ -95,6 +95,7 @@ eng.velocity_ramp = p.ramp * strain_end * L / p.velocity
 
 O.engines = []
 woven.attach(eng, set_dt=True, safety=p.safety)
+check_steps(t_run, O.dt, 'safety', p.safety, 'the pull')
 steps = int(math.ceil(t_run / O.dt))
 every = max(1, steps // p.samples)
 rows = []

@@ -11,6 +11,24 @@ import os
 import sys
 
 
+# The most steps a scene may be asked to run: a billion steps of the smallest scenes (~10 us each) is
+# months of CPU, and a count past 2^63 overflowed YADE's C long (safety = 1e-300: an OverflowError
+# instead of an error naming the key).
+MAX_STEPS = 10 ** 9
+
+
+def check_steps(duration, dt, key, value, what='the run'):
+    """Refuses a run of `duration` s at time step `dt` that would take more than MAX_STEPS steps:
+    ValueError naming `key` (the key that set dt, in proportion: safety, guard_safety) with the least
+    value this run allows. Returns duration / dt."""
+    n = duration / dt if dt > 0 else math.inf
+    if not n <= MAX_STEPS:
+        least = value * n / MAX_STEPS if math.isfinite(n) else math.inf
+        raise ValueError('%s = %r is invalid: %s (%.6g s) would take %.3g steps of %.3g s, more than %d; allowed %s >= '
+                         '%.3g here (within its own range)' % (key, value, what, duration, n, dt, MAX_STEPS, key, least))
+    return n
+
+
 class Params(dict):
     """dict with attribute access; .units and .docs hold each key's unit and description."""
 

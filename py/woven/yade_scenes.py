@@ -14,6 +14,7 @@ from yade._minieigenHP import Vector3
 
 from . import yade_grid as yg
 from .output import savetxt
+from .params import check_steps
 
 _O = yade.wrapper.Omega()
 
@@ -104,6 +105,7 @@ def ballistic(p, d, weave_keys, contact_keys):
     proj.state.vel = Vector3(0, 0, -p.V)
     O.dt = g.stable_dt(p.dt_factor)
     O.trackEnergy = True
+    check_steps(p.t_end, O.dt, 'dt_factor', p.dt_factor, 't_end')
     steps_max = int(math.ceil(p.t_end / O.dt))
     every = max(1, steps_max // p.samples)
     node_ids = g.node_ids()
@@ -305,6 +307,7 @@ def tension(p, d, weave_args):
     t_run = strain_end * L / p.velocity * (1 + 0.5 * p.ramp)
     t_ramp = p.ramp * strain_end * L / p.velocity
     O.dt = g.stable_dt(p.dt_factor)
+    check_steps(t_run, O.dt, 'dt_factor', p.dt_factor, 'the pull')
     steps = int(math.ceil(t_run / O.dt))
     every = max(1, steps // p.samples)
     rows, st = [], {'max_overlap': 0.0}

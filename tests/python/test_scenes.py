@@ -47,6 +47,38 @@ def test_bad_key_fails_with_its_name(script_server, tmp_path, script, arg, name)
     assert rc != 0 and name in log and 'allowed' in log
 
 
+# A time step so small that the run's step count overflowed YADE's C long (an OverflowError, found by
+# `scripts/fuzz.py seed=20261205`) is refused naming the key that set it (woven.params.check_steps).
+@pytest.mark.parametrize('script, args, name', [
+    ('smith.py', ['safety=1e-300'], 'safety'),
+    ('tension.py', ['nx=1', 'ny=1', 'safety=1e-300'], 'safety'),
+    ('pullout.py', ['safety=1e-300'], 'safety'),
+    ('ballistic.py', ['side=0.0127', 'safety=1e-300'], 'safety'),
+    ('ballistic.py', ['side=0.0127', 'guard_safety=1e-300'], 'guard_safety'),
+    ('soak.py', ['nx=1', 'ny=1', 'safety=1e-300'], 'safety')])
+def test_a_run_of_more_than_a_billion_steps_is_refused_naming_the_key(script_server, tmp_path, script, args, name):
+    rc, log, s = run_refused(script_server, script, tmp_path, *args)
+    assert rc != 0 and ('%s = 1e-300 is invalid' % name) in log and 'more than 1000000000' in log, log
+    assert 'OverflowError' not in log
+
+
+def test_the_grid_baselines_tiny_step_is_refused_naming_dt_factor(tmp_path):
+    # in its own YADE process (the grid model labels its engines in YADE's own namespace)
+    rc, log, s = run_scene('tension.py', tmp_path, 'nx=1', 'ny=1', 'model=yade', 'dt_factor=1e-300')
+    assert rc != 0 and 'dt_factor = 1e-300 is invalid' in log and 'OverflowError' not in log and s is None
+
+
+def test_check_steps_refuses_past_the_limit_with_the_least_value():
+    from woven.params import MAX_STEPS, check_steps
+    assert check_steps(1e-4, 1e-8, 'safety', 0.7) == pytest.approx(1e4)
+    with pytest.raises(ValueError) as e:
+        check_steps(1.0, 1e-10, 'safety', 0.5)  # 1e10 steps: the least safety is 0.5 x 10 = 5
+    assert 'safety = 0.5 is invalid' in str(e.value) and 'safety >= 5' in str(e.value)
+    with pytest.raises(ValueError):
+        check_steps(1.0, 0.0, 'dt_factor', 0.0)
+    assert check_steps(MAX_STEPS * 1e-9, 1e-9, 'safety', 1.0) == pytest.approx(MAX_STEPS)
+
+
 def test_a_refused_key_stops_yade_with_a_non_zero_exit(tmp_path):
     # the contract as a user meets it: yade -x exits non-zero, the log names the key (the other
     # refusals are checked in one process: conftest.run_refused)
