@@ -185,6 +185,17 @@ if p.vtk_every < -1:
     bad('vtk_every', '-1 (none), 0 (first and last) or a step count')
 if p.mirror_every < 0:
     bad('mirror_every', '0 (off) or a step count')
+for k in ('nx', 'ny'):
+    if not 0 <= p[k] <= 100000:
+        bad(k, '[0, 100000] repeats (0: from side)')
+if not 1 <= p.clear_steps <= 10 ** 7:
+    bad('clear_steps', '[1, 1e7] steps')
+if not 3 <= p.vtk_rings <= 256:
+    bad('vtk_rings', '[3, 256] points per section')
+if not (math.isfinite(p.progress) and p.progress >= 0):
+    bad('progress', '[0, inf) s (0: none)')
+if not (math.isfinite(p.break_strain) and p.break_strain <= 10):
+    bad('break_strain', '(0, 10], or <= 0: the material failure strain')
 woven.contact.check_friction(p)
 if p.model == 'yade' and p.body_friction > 0:  # woven.yade_grid gives the projectile a frictionless material
     bad('body_friction', "0 with model = 'yade' (its projectile-yarn contacts are frictionless); [0, 2] with model = 'woven'")
@@ -487,11 +498,12 @@ if pk is not None:
                         'sum_absorbed_per_ply': sum(b['absorbed'] for b in books),
                         'areal_density': w.summary['areal_density']}
 info = eng.yarn(w.warp_yarns[0])
+failure_strain = p.break_strain if p.break_strain > 0 else info['failure_strain']  # the engine's reading (<= 0: the material's)
 reference = {'v50_km2_706_single_ply_022_rcc': [90.0, 100.0],  # physics-reference.md (Nilakantan et al.)
              'smith_strain_at_V': woven.theory.smith(p.V, info['E'], info['rho'])['strain'],
-             'smith_critical_velocity': woven.theory.smith_critical_velocity(p.break_strain or info['failure_strain'],
+             'smith_critical_velocity': woven.theory.smith_critical_velocity(failure_strain,
                                                                             info['E'], info['rho']),
-             'failure_strain': p.break_strain or info['failure_strain']}
+             'failure_strain': failure_strain}
 units = {'projectile_speed_end': 'm/s', 'projectile': 'kg, m, deg, kg m^2, kg/m^3, m^3, rad (chisel_angle)',
          'pack': 'J, m, deg (per_ply: energies at the end of the run; shared: entries not split by ply)',
          'residual_velocity': 'm/s', 'projectile_velocity_end': 'm/s', 'absorbed_energy': 'J', 'max_penetration': 'm',
@@ -543,7 +555,7 @@ if shots is not None:
     # seen in a test run here, beside a stale Xvfb) is reported, and the run's figures and status stand.
     try:
         t_pic = time.time()
-        measured['pictures'] = shots.finish(O.time, p.break_strain or info['failure_strain'])
+        measured['pictures'] = shots.finish(O.time, failure_strain)
         measured['pictures_seconds'] = time.time() - t_pic
     except (RuntimeError, OSError, subprocess.TimeoutExpired) as ex:
         print('ballistic: WARNING: pictures failed (the run stands):', ex)

@@ -53,10 +53,24 @@ def test_no_perforation_is_reported_clearly(tmp_path):
                                       (['V=inf'], 'V'), (['shape=cone'], 'shape'), (['standoff=-1e-3'], 'standoff'),
                                       (['clamp=3'], 'clamp'), (['energy_guard=0.01'], 'energy_guard'),
                                       (['energy_guard=-1'], 'energy_guard'), (['guard_safety=0.8'], 'guard_safety'),
-                                      (['backface_strain=-1e-4'], 'backface_strain')])
+                                      (['backface_strain=-1e-4'], 'backface_strain'), (['nx=-1'], 'nx'),
+                                      (['ny=-2'], 'ny'), (['clear_steps=-1'], 'clear_steps'),
+                                      (['vtk_rings=0'], 'vtk_rings'), (['progress=-1'], 'progress'),
+                                      (['break_strain=nan'], 'break_strain'), (['break_strain=20'], 'break_strain')])
 def test_bad_input_names_the_key(script_server, tmp_path, args, key):
     rc, log, s = run_refused(script_server, 'ballistic.py', tmp_path, 'side=0.004', *args)
     assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log
+
+
+def test_a_negative_break_strain_is_the_materials_in_the_summary_too(tmp_path):
+    # break_strain <= 0 breaks at the material's failure strain (the engine's reading); the summary
+    # read -1 as a strain and stopped the finished run with an error naming failure_strain (found by
+    # scripts/fuzz.py seed=77)
+    rc, log, s = run_scene('ballistic.py', tmp_path, 'side=0.004', 't_end=1e-6', 'vtk_every=-1', 'progress=0',
+                           'break_strain=-1')
+    assert rc == 0, log
+    assert s['reference']['failure_strain'] == pytest.approx(0.05)  # KM2's
+    assert s['reference']['smith_critical_velocity'] > 0
 
 
 def _plate(yade_ns, side_repeats=3):
