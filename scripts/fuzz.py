@@ -95,11 +95,13 @@ FUNCTIONS = {
     'theory.fit_lambert_jonas': [('V', [80.0, 120.0, 160.0, 200.0]), ('vr', [0.0, 60.0, 120.0, 170.0])],
     'set_threads': [('n', 1)], 'penalty_dt_limit': [('m', 1e-6), ('k', 1e5)],
 }
-# Scene runs: a short valid base and one mutated key (the base keeps each run to seconds).
+# Scene runs: a short valid base and one mutated key (the base keeps each run to seconds). The base
+# must pass on its own (tests/python/test_fuzz.py checks): smith.py's duration 0.2 left fewer than 4 nodes on
+# the transverse front at 800 elements, so every smith case was refused for the base, not its key.
 SCENES = {
     'weave.py': ({'nx': 2, 'ny': 2, 'picture': 0}, ['nx', 'ny', 'cp_per_span', 'E', 'rho', 'spacing', 'pattern',
                                                        'crimp', 'picture', 'colour']),
-    'smith.py': ({'elements': 800, 'levels': 1, 'duration': 0.2}, ['V', 'E', 'rho', 'length', 'elements', 'levels',
+    'smith.py': ({'elements': 800, 'levels': 1, 'duration': 0.6}, ['V', 'E', 'rho', 'length', 'elements', 'levels',
                                                                     'duration', 'safety', 'strain_tol', 'colour']),
     'ballistic.py': ({'side': 4e-3, 't_end': 2e-6, 'vtk_every': -1, 'progress': 0}, [
         'V', 'mass', 'size', 'side', 'clamp', 't_end', 'shape', 'break_strain', 'weibull_m', 'seed', 'mcd', 'safety',
