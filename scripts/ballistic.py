@@ -92,7 +92,7 @@ defaults.update({
     't_end': (1e-4, 's', 'simulated time at most'),
     'stop': (True, '', 'stop at perforation or arrest (else run to t_end)'),
     'clear_steps': (200, '', 'steps below the ply out of contact, or without a change of speed (> 1e-4 V), that count as perforated'),
-    'break_strain': (0.0, '', 'failure strain in (0, 10]; 0: the material failure strain (KM2: 5 %)'),
+    'break_strain': (0.0, '', 'failure strain in [1e-12, 10]; <= 0: the material failure strain (KM2: 5 %)'),
     'break_filter': (-4.0, 'm', 'strain filter: tau = L / c, L = break_filter [m] if > 0, |break_filter| element lengths if < 0, 0: raw strain'),
     'weibull_m': (0.0, '', 'Weibull modulus of yarn strength (0: none; else [1, 100])'),
     'seed': (1, '', 'seed of the Weibull draw'),
@@ -194,8 +194,8 @@ if not 3 <= p.vtk_rings <= 256:
     bad('vtk_rings', '[3, 256] points per section')
 if not (math.isfinite(p.progress) and p.progress >= 0):
     bad('progress', '[0, inf) s (0: none)')
-if not (math.isfinite(p.break_strain) and p.break_strain <= 10):
-    bad('break_strain', '(0, 10], or <= 0: the material failure strain')
+if not (math.isfinite(p.break_strain) and p.break_strain <= 10 and not 0 < p.break_strain < 1e-12):
+    bad('break_strain', '[1e-12, 10], or <= 0: the material failure strain')
 woven.contact.check_friction(p)
 if p.model == 'yade' and p.body_friction > 0:  # woven.yade_grid gives the projectile a frictionless material
     bad('body_friction', "0 with model = 'yade' (its projectile-yarn contacts are frictionless); [0, 2] with model = 'woven'")
