@@ -194,8 +194,6 @@ if not 3 <= p.vtk_rings <= 256:
     bad('vtk_rings', '[3, 256] points per section')
 if not (math.isfinite(p.progress) and p.progress >= 0):
     bad('progress', '[0, inf) s (0: none)')
-if not (math.isfinite(p.break_strain) and p.break_strain <= 10 and not 0 < p.break_strain < 1e-12):
-    bad('break_strain', '[1e-12, 10], or <= 0: the material failure strain')
 woven.contact.check_friction(p)
 if p.model == 'yade' and p.body_friction > 0:  # woven.yade_grid gives the projectile a frictionless material
     bad('body_friction', "0 with model = 'yade' (its projectile-yarn contacts are frictionless); [0, 2] with model = 'woven'")

@@ -8,10 +8,10 @@
 namespace woven {
 
 void BreakageParams::validate() const {
-  require(std::isfinite(threshold) && threshold <= 10, "break_strain", threshold,
-          "(0, 10] (<= 0: the material's failure strain)");
-  require(std::isfinite(filterLength) && filterLength >= -100, "break_filter", filterLength,
-          "[-100, inf): > 0 a length [m], < 0 that many element lengths, 0 the raw strain");
+  require(std::isfinite(threshold) && threshold <= 10 && !(threshold > 0 && threshold < 1e-12), "break_strain", threshold,
+          "[1e-12, 10] (<= 0: the material's failure strain)");
+  require(std::isfinite(filterLength) && filterLength >= -100 && filterLength <= 1, "break_filter", filterLength,
+          "[-100, 1]: > 0 a length [m], < 0 that many element lengths, 0 the raw strain");
   require(weibullModulus == 0 || (weibullModulus >= 1 && weibullModulus <= 100), "weibull_m", weibullModulus,
           "0 (no scatter) or [1, 100]");
 }

@@ -49,8 +49,11 @@ void ContactParams::validate() const {
   require(std::isfinite(bodyFriction) && bodyFriction >= 0 && bodyFriction <= 2, "body_friction", bodyFriction,
           "[0, 2] (Coulomb coefficient between a rigid body and the yarns)");
   require(std::isfinite(mcd) && mcd > 0 && mcd < 1, "mcd", mcd, "(0, 1) (maximum cross-sectional deformation)");
-  require(std::isfinite(margin) && margin >= 0, "margin", margin, "[0, inf) m");
-  require(std::isfinite(skin) && skin >= 0, "skin", skin, "[0, inf) m");
+  // Lengths bounded at sizes past any use (a yarn is ~0.1 mm thick): a skin of 1e300 m made every
+  // CP pair a candidate, the pair list and its memory quadratic in the CPs (scripts/fuzz.py found
+  // such values taken).
+  require(std::isfinite(margin) && margin >= 0 && margin <= 1e-3, "margin", margin, "[0, 1e-3] m");
+  require(std::isfinite(skin) && skin >= 0 && skin <= 1e-2, "skin", skin, "[0, 1e-2] m");
   require(std::isfinite(tolerance) && tolerance > 0, "tolerance", tolerance, "(0, inf) m/s");
   require(maxIterations >= 1, "max_iterations", maxIterations, "[1, inf)");
   require(std::isfinite(solverTolerance) && solverTolerance >= 0 && solverTolerance <= 1e-3, "solver_tolerance",
@@ -58,8 +61,10 @@ void ContactParams::validate() const {
   require(flattenPasses >= 1, "flatten_passes", flattenPasses, "[1, inf)");
   require(std::isfinite(positionCorrection) && positionCorrection >= 0 && positionCorrection <= 1,
           "position_correction", positionCorrection, "[0, 1]");
-  require(std::isfinite(correctionSlop) && correctionSlop >= 0, "correction_slop", correctionSlop, "[0, inf) m");
-  require(std::isfinite(cacheDistance) && cacheDistance >= 0, "contact_cache", cacheDistance, "[0, inf) m (0: off)");
+  require(std::isfinite(correctionSlop) && correctionSlop >= 0 && correctionSlop <= 1e-3, "correction_slop",
+          correctionSlop, "[0, 1e-3] m");
+  require(std::isfinite(cacheDistance) && cacheDistance >= 0 && cacheDistance <= 1e-3, "contact_cache", cacheDistance,
+          "[0, 1e-3] m (0: off)");
   require(threads >= 0 && threads <= 64, "threads", threads, "[0, 64] (0: OpenMP's count)");
   require(static_cast<int>(sweepOrder) <= 2, "sweep_order", static_cast<int>(sweepOrder), "'coloured', 'sequential' or 'blocked'");
   require(std::isfinite(penaltyStiffness) && penaltyStiffness > 0, "penalty_stiffness", penaltyStiffness, "(0, inf) N/m");

@@ -57,7 +57,8 @@ def test_no_perforation_is_reported_clearly(tmp_path):
                                       (['ny=-2'], 'ny'), (['clear_steps=-1'], 'clear_steps'),
                                       (['vtk_rings=0'], 'vtk_rings'), (['progress=-1'], 'progress'),
                                       (['break_strain=nan'], 'break_strain'), (['break_strain=20'], 'break_strain'),
-                                      (['break_strain=1e-300'], 'break_strain')])
+                                      (['break_strain=1e-300'], 'break_strain'), (['break_filter=1e300'], 'break_filter'),
+                                      (['skin=1e300'], 'skin')])
 def test_bad_input_names_the_key(script_server, tmp_path, args, key):
     rc, log, s = run_refused(script_server, 'ballistic.py', tmp_path, 'side=0.004', *args)
     assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log

@@ -16,7 +16,9 @@ def small():
                                                  ('restitution', 1.5, '[0, 1]'), ('restitution', -0.1, '[0, 1]'),
                                                  ('friction', -0.2, '[0, 2]'), ('friction', 2.5, '[0, 2]'),
                                                  ('body_friction', -0.1, '[0, 2]'), ('body_friction', float('nan'), '[0, 2]'),
-                                                 ('margin', -1e-9, '[0, inf) m'),
+                                                 ('margin', -1e-9, '[0, 1e-3] m'), ('skin', 1e300, '[0, 1e-2] m'),
+                                                 ('margin', 1e300, '[0, 1e-3] m'), ('correction_slop', 1.0, '[0, 1e-3] m'),
+                                                 ('contact_cache', 1e300, '[0, 1e-3] m'),
                                                  ('section_rule', 'oval', "'paper'"), ('broad_phase', 'octree', "'grid'")])
 def test_bad_contact_parameter_names_key_and_range(small, key, value, allowed):
     with pytest.raises(ValueError) as e:
