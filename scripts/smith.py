@@ -66,9 +66,9 @@ front_nodes = 0.6 * th['U_E'] * 0.5 * p.duration * (p.length / 2) / c / (p.lengt
 if front_nodes < MIN_FRONT_NODES:
     need = int(math.ceil(coarsest * MIN_FRONT_NODES / front_nodes)) << (p.levels - 1)
     raise ValueError('elements = %r is invalid: allowed elements / 2^(levels-1) giving at least %d nodes on the '
-                     'transverse front at the coarsest resolution (here %.1f; with V = %g m/s, duration = %g and '
-                     'levels = %d: elements >= %d, or fewer levels)'
-                     % (p.elements, MIN_FRONT_NODES, front_nodes, p.V, p.duration, p.levels, need + need % 2))
+                     'transverse front at the coarsest resolution (here %.1f; with V = %g m/s, E = %g Pa, rho = %g '
+                     'kg/m^3, duration = %g and levels = %d: elements >= %d, or fewer levels)'
+                     % (p.elements, MIN_FRONT_NODES, front_nodes, p.V, p.E, p.rho, p.duration, p.levels, need + need % 2))
 d = out_dir('smith', p)
 
 
