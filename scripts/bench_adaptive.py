@@ -64,6 +64,10 @@ if not 1e-4 <= p.size <= 0.1:
     raise ValueError('size = %r is invalid: allowed [1e-4, 0.1] m' % (p.size,))
 if not 0 < p.mass <= 10:
     raise ValueError('mass = %r is invalid: allowed (0, 10] kg' % (p.mass,))
+if not 0 < p.goal_speedup <= 1000:
+    raise ValueError('goal_speedup = %r is invalid: allowed (0, 1000]' % (p.goal_speedup,))
+if not 0 < p.goal_residual <= 1:
+    raise ValueError('goal_residual = %r is invalid: allowed (0, 1] (a fraction of the uniform residual)' % (p.goal_residual,))
 d = out_dir('bench_adaptive', p)
 side = 0.012 if p.quick else p.side
 here = os.path.dirname(os.path.abspath(sys.argv[0]))  # under yade -x, __file__ is yade's own

@@ -19,6 +19,7 @@
 # CP-step rate of at least 1/30 of the springs-alone rate), and writes
 # out/bench_ballistic/summary.json.
 import json
+import math
 import os
 import time
 
@@ -49,6 +50,14 @@ if not (isinstance(p.threads, int) and 1 <= p.threads <= 64):
     raise ValueError('threads = %r is invalid: allowed an integer in [1, 64]' % (p.threads,))
 if not (isinstance(p.repeats, int) and 1 <= p.repeats <= 10):
     raise ValueError('repeats = %r is invalid: allowed an integer in [1, 10]' % (p.repeats,))
+if not (math.isfinite(p.t_end) and 0 < p.t_end <= 0.01):
+    raise ValueError('t_end = %r is invalid: allowed (0, 0.01] s' % (p.t_end,))
+if not (math.isfinite(p.side) and 1e-3 <= p.side <= 1):
+    raise ValueError('side = %r is invalid: allowed [1e-3, 1] m (the scene\'s range)' % (p.side,))
+if not (isinstance(p.chain_steps, int) and 1 <= p.chain_steps <= 10 ** 6):
+    raise ValueError('chain_steps = %r is invalid: allowed an integer in [1, 1e6]' % (p.chain_steps,))
+if not (math.isfinite(p.goal_seconds) and p.goal_seconds > 0):
+    raise ValueError('goal_seconds = %r is invalid: allowed (0, inf) s' % (p.goal_seconds,))
 if not 1 <= p.plies <= woven.pack.MAX_PLIES:
     raise ValueError('plies = %r is invalid: allowed [1, %d]' % (p.plies, woven.pack.MAX_PLIES))
 if not (0 < p.V <= 5000):

@@ -34,6 +34,10 @@ p = read_params({'nx': (50, '', 'repeats along x (2 weft yarns each): 50 gives 1
 for k, lo in (('nx', 1), ('ny', 1), ('steps', 1), ('threads', 1), ('repeats', 1)):
     if p[k] < lo:
         raise ValueError('%s = %r is invalid: allowed [%d, inf)' % (k, p[k], lo))
+if not 0 < p.velocity <= 100:
+    raise ValueError('velocity = %r is invalid: allowed (0, 100] m/s (tension.py\'s range)' % (p.velocity,))
+if not 0 < p.goal <= 64:
+    raise ValueError('goal = %r is invalid: allowed (0, 64] (a speed-up)' % (p.goal,))
 d = out_dir('bench_threads', p)
 if woven.openmp_threads() < p.threads:
     print('bench_threads: WARNING: OpenMP has %d thread(s) here (yade -j %d missing?): idle threads sleep between '

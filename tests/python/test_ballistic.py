@@ -278,6 +278,18 @@ def test_bench_adaptive_quick(tmp_path):
     assert set(s['checks']) == {'speedup', 'residual_velocity', 'perforated'}
 
 
+# Taken silently before (a negative side built a ply, t_end=-1 timed nothing, a negative goal printed
+# a negative ratio): the benches refuse their own keys' nonsense naming the key.
+@pytest.mark.parametrize('script, arg, key', [
+    ('bench_ballistic.py', 'side=-1', 'side'), ('bench_ballistic.py', 't_end=-1', 't_end'),
+    ('bench_ballistic.py', 'chain_steps=0', 'chain_steps'), ('bench_ballistic.py', 'goal_seconds=-1', 'goal_seconds'),
+    ('bench_threads.py', 'velocity=-1', 'velocity'), ('bench_threads.py', 'goal=-1', 'goal'),
+    ('bench_adaptive.py', 'goal_speedup=-1', 'goal_speedup'), ('bench_adaptive.py', 'goal_residual=nan', 'goal_residual')])
+def test_bench_keys_out_of_range_name_the_key(script_server, tmp_path, script, arg, key):
+    rc, log, s = run_refused(script_server, script, tmp_path, arg)
+    assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log, log[-800:]
+
+
 def test_bench_adaptive_bad_window_names_the_key(script_server, tmp_path):
     rc, log, s = run_refused(script_server, 'bench_adaptive.py', tmp_path, 'quick=1', 'window=both')
     assert rc != 0 and 'window = ' in log and 'allowed' in log
