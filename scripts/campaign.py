@@ -74,6 +74,8 @@ if p.scheduler and p.backend != 'dask':
     bad('scheduler', "empty unless backend = 'dask'")
 if not 0 <= p.boot <= 100000:
     bad('boot', '[0, 100000]')
+if not 0 <= p.boot_seed < 2 ** 63:  # numpy's default_rng refused a negative one after every run had finished
+    bad('boot_seed', 'an integer in [0, 2^63)')
 if not 0 < p.level < 1:
     bad('level', '(0, 1)')
 scene = {}

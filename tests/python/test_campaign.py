@@ -148,7 +148,7 @@ def test_unreachable_scheduler_is_refused_naming_the_key(tmp_path):
                                      ('seeds=1,1', 'seeds'), ('backend=mpi', 'backend'), ('jobs=0', 'jobs'),
                                      ('scheduler=tcp://x:1', 'scheduler'), ('scene=V=3', 'scene'),
                                      ('level=1', 'level'), ('scene=friction=3', 'friction'),
-                                     ('scene=body_friction=-0.5', 'body_friction')])
+                                     ('scene=body_friction=-0.5', 'body_friction'), ('boot_seed=-1', 'boot_seed')])
 def test_bad_keys_name_the_key(script_server, tmp_path, arg, key):
     rc, log, _ = run_refused(script_server, 'campaign.py', tmp_path, arg, timeout=120)
     assert rc != 0 and ('%s = ' % key) in log and 'allowed' in log, log
