@@ -129,12 +129,12 @@ void GridCollider::collide(const Fabric& f, const std::vector<OBB>& boxes, const
       const Cell a = cellOf(aabb_[i].lo), b = cellOf(aabb_[i].hi);
       if (held_[i] && f.alive[i] && a == cellLo_[i] && b == cellHi_[i]) continue;
       if (held_[i]) remove(i);
+      if (!f.alive[i]) continue;  // a broken CP leaves the grid, however far its box has flown
       moving_.push_back(i);
       fresh = fresh || b.x - a.x >= kMaxSpan || b.y - a.y >= kMaxSpan || b.z - a.z >= kMaxSpan;
     }
     if (!fresh)
-      for (Index i : moving_)
-        if (f.alive[i]) insert(i);
+      for (Index i : moving_) insert(i);
   }
   if (fresh && !rebuild(f, boxes)) return;
 
