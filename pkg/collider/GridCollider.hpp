@@ -15,7 +15,8 @@
 // and rebuilding the whole grid for them each step was the broad phase's cost. The pairs found do
 // not depend on the cell size (a pair is listed in the cell of its intersection's lowest corner,
 // whatever the cells), so a grid whose boxes grew past its cells is exact, only slower; a partial
-// call whose boxes span more than kMaxSpan cells along an axis rebuilds it.
+// call whose live boxes span more than kMaxSpan cells along an axis rebuilds it (a broken CP only
+// leaves the grid, however far its box has flown).
 #pragma once
 #include "collider/CandidatePairs.hpp"
 #include <cstdint>
@@ -36,7 +37,8 @@ class GridCollider {
   Real cellSize = 0;      ///< of the grid [m]
   long rebuilds = 0;      ///< full builds of the grid
 
-  /// A partial call rebuilds the grid when a flagged box spans more cells than this along an axis.
+  /// A partial call rebuilds the grid when a flagged live CP's box spans more cells than this along
+  /// an axis.
   static constexpr int kMaxSpan = 4;
 
  private:
