@@ -278,18 +278,15 @@ def mirror():
         O.bodies[bid].state.pos = Vector3(*X[i])
 
 
-state = {'contact_seen': False, 'clear': 0, 'steady': 0, 'vz_ref': -p.V, 'outcome': 'running', 'min_nose': float('inf'), 'wall0': time.time(),
-         'last_progress': time.time(), 'mirror_seconds': 0.0}
-rows = []
-
-
 def nose_z():
     return proj.state.pos[2] - low  # the cube's face, the sphere's pole, the cylinder's lowest point at the start
 
 
-# The deepest nose from the start (a run shorter than the watch's first call, t_end = 1e-300, read
-# -inf as its penetration: scripts/fuzz.py seed=9001).
-state['min_nose'] = nose_z()
+# min_nose: the deepest nose from the start (a run shorter than the watch's first call, t_end =
+# 1e-300, read -inf as its penetration: scripts/fuzz.py seed=9001).
+state = {'contact_seen': False, 'clear': 0, 'steady': 0, 'vz_ref': -p.V, 'outcome': 'running', 'min_nose': nose_z(),
+         'wall0': time.time(), 'last_progress': time.time(), 'mirror_seconds': 0.0}
+rows = []
 
 
 def sample():
