@@ -7,7 +7,8 @@
 // three runs, in this process), the solve's figures and the run's outcome; with several thread counts
 // the speed-up of each against one thread beside an ideal loop's (core/ThreadCeiling.hpp), and
 // whether every count ends in the same bits (positions, velocities, sections and their directions,
-// broken CPs, energy books, the cube). Tension: scripts/bench_threads.py's scene (bench_collide's):
+// broken CPs, energy books, the cube), and with more than one thread what moving data between two
+// threads costs (core/ThreadCeiling.hpp's coreHandoff). Tension: scripts/bench_threads.py's scene (bench_collide's):
 // `yarns` x `yarns` yarns of KM2 706 (plain weave, cp 4 per span, damping ratio 0.1), sections settled,
 // warp ends held and pulled along +x at 1 m/s (ramped over 10 us), collisions with the core's defaults
 // (tree broad phase, sequential sweeps); its steps after `warmup` steps (trees, buffers) are timed.
@@ -19,7 +20,8 @@
 //     side=0.0508 [m]   cp=1 (CPs per span)   t_end=1e-4 [s]   V=200 [m/s]   crossings=persistent|chords   skin=4e-5 [m]
 //     threads=1 (comma-separated counts, e.g. 1,2,4,8,16)   sweeps=20   out=FILE (JSON of the figures)
 //     baseline=1 (0: no springs-alone runs; for instruction counts of the coupled run alone)
-//     every=0 (N > 0: a line every N steps with the wall time per step and the counts then)
+//     every=0 (N > 0: lines every N steps with the wall time per step, the counts then and the census of
+//              the contacts no crossing stands for: side by side, between near-parallel CPs)
 // The step is FabricEngine::step (the engine adapter's work without YADE's own). Built with
 // -DWOVEN_BASELINE against an earlier tree's core (bench/baseline_impact.sh), it runs that core's
 // model on the same scene: the paired runs of the persistent-crossing issue.
@@ -251,6 +253,22 @@ Result impact(const Options& o, int threads) {
 #endif
                   st.stats.impulses.rows, st.stats.impulses.unresolved, st.stats.candidates, renewedOf(st.stats),
                   cube ? st.bodies[0].vel.z() : 0.0, e->dynamics().energy().balanceError());
+#ifndef WOVEN_BASELINE
+      // The census of the CP-pair contacts no crossing stands for: where the step's contact work goes
+      // once crossings are handed back or yarns close up side by side (docs/collisions.md).
+      const Fabric& f = e->fabric();
+      long general = 0, side = 0, parallel = 0;
+      for (const CPContact& c : st.contacts()) {
+        if (c.crossing >= 0) continue;
+        ++general;
+        side += c.kind == ContactKind::Side;
+        const Index a = f.elem0[c.cpA], b = f.elem0[c.cpB];
+        const Vec3 da = f.pos[a + 1] - f.pos[a], db = f.pos[b + 1] - f.pos[b];
+        parallel += std::abs(da.dot(db)) >= std::sqrt(0.5) * da.norm() * db.norm();  // within 45 degrees
+      }
+      std::printf("      %ld other contacts: %ld side by side, %ld between CPs within 45 degrees of parallel; %ld CPs broken\n",
+                  general, side, parallel, static_cast<long>(std::count(f.alive.begin(), f.alive.end(), 0)));
+#endif
       lastWall = w;
     }
     r.rows += st.stats.impulses.rows, r.sweeps += st.stats.impulses.iterations;
@@ -377,7 +395,20 @@ int main(int argc, char** argv) {
                   r.residual, r.vz, r.maxOverlap, r.balance, r.work, r.broken);
     json += buf;
   }
-  json += "], \"cps\": " + std::to_string(firstCps) + std::string(", \"same_bits\": ") + (same ? "true" : "false") + "}\n";
+  // What moving data between two threads costs here (core/ThreadCeiling.hpp), beside the ideal loop.
+  std::string handoff = "null, \"remote_read_ratio\": null";
+  if (*std::max_element(o.threads.begin(), o.threads.end()) > 1) {
+    const CoreHandoff h = coreHandoff();
+    if (std::isfinite(h.roundTripNs) && std::isfinite(h.remoteReadRatio)) {
+      std::printf("  the cores: a cache line's round trip between two threads %.0f ns; 16 384 scattered lines the other thread "
+                  "wrote read %.2fx as long as the reader's own\n", h.roundTripNs, h.remoteReadRatio);
+      char b[128];
+      std::snprintf(b, sizeof b, "%.6g, \"remote_read_ratio\": %.6g", h.roundTripNs, h.remoteReadRatio);
+      handoff = b;
+    }
+  }
+  json += "], \"cps\": " + std::to_string(firstCps) + std::string(", \"same_bits\": ") + (same ? "true" : "false") +
+          ", \"handoff_round_trip_ns\": " + handoff + "}\n";
   if (!o.out.empty()) {
     FILE* fp = std::fopen(o.out.c_str(), "w");
     if (!fp) usage("out = " + o.out + " cannot be written");

@@ -50,7 +50,7 @@ bench() {
 }
 
 # The table from the logs: one row per scene and count (CPs, steps, wall, speed-up, ideal loop, their
-# ratio, bits, phases).
+# ratio, bits, phases), then the cores' handoff costs (core/ThreadCeiling.hpp's coreHandoff).
 table() {
   printf '%-12s %8s %6s %4s %9s %8s %8s %6s %5s  %s\n' scene CPs steps thr wall_s speedup ideal ratio bits \
          'refit/broad/narrow/respond/project/rest [s]'
@@ -64,6 +64,8 @@ table() {
       /by phase \[s\]:/ { printf "%-12s %8s %6s %4s %9s %8s %8s %6.2f %5s  %s/%s/%s/%s/%s/%s\n", name, cps, steps, thr, wall,
                           sp, id, (id > 0 ? sp / id : 0), bits, $5, $7, $9, $11, $13, $15 }' "$log"
   done
+  # what moving data between two threads costs on this machine (the first driver's measure)
+  grep -h -m1 'the cores:' "$dir"/*.log | head -1 | sed 's/^ *the cores: /cores: /'
 }
 
 measure() {

@@ -5,8 +5,11 @@
 // woven on 1 and N threads times this one beside it, in the same process, and prints both ratios.
 #pragma once
 #include "core/Parallel.hpp"
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace woven {
@@ -28,6 +31,68 @@ inline double idealLoopSeconds(int nThreads, int rounds) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   releaseThreads();
   return x[0] > 0 ? seconds : -1;  // x read: the loop is not optimised away
+}
+
+/// What moving data between two threads costs on this machine, beside the ideal loop (which moves
+/// none): the round trip of one cache line bounced between threads 0 and 1 [ns], and how many times
+/// longer thread 0 takes to read 16 384 scattered lines (1 MiB) that thread 1 wrote last than the
+/// same lines written by itself (the best of 5 each). The step hands its data between the threads at
+/// every serial phase (the sweeps) and every gather by node (contacts, rows): where these two are
+/// large, its speed-up stays far below the ideal loop's whatever the loops (docs/design.md,
+/// Threads). NaN without OpenMP or where the region gets fewer than 2 threads.
+struct CoreHandoff {
+  double roundTripNs = std::numeric_limits<double>::quiet_NaN();
+  double remoteReadRatio = std::numeric_limits<double>::quiet_NaN();
+};
+
+inline CoreHandoff coreHandoff() {
+  CoreHandoff h;
+#ifdef _OPENMP
+  using Clock = std::chrono::steady_clock;
+  constexpr int kBounces = 20000, kLines = 1 << 14, kRepeats = 5;
+  struct alignas(64) Line {
+    std::atomic<int> v{0};
+    double pad[7];
+  };
+  Line flag;
+  std::vector<Line> lines(kLines);
+  std::vector<std::uint32_t> order(kLines);
+  for (std::uint32_t k = 0, x = 12345; k < kLines; ++k) x = x * 1664525u + 1013904223u, order[k] = x % kLines;
+  double local = 1e300, remote = 1e300, sum = 0;
+#pragma omp parallel num_threads(2) reduction(+ : sum)
+  {
+    const int t = omp_get_thread_num();
+    if (omp_get_num_threads() == 2) {
+      const auto t0 = Clock::now();
+      for (int k = 0; k < kBounces; ++k) {  // thread 0 writes 2k + 1, thread 1 answers 2k + 2
+        if (t == 0) flag.v.store(2 * k + 1, std::memory_order_release);
+        while (flag.v.load(std::memory_order_acquire) != 2 * k + 2 - t) {
+        }
+        if (t == 1) flag.v.store(2 * k + 2, std::memory_order_release);
+      }
+      if (t == 0) h.roundTripNs = 1e9 * std::chrono::duration<double>(Clock::now() - t0).count() / kBounces;
+#pragma omp barrier
+      for (int r = 0; r < 2 * kRepeats; ++r) {
+        const int writer = r % 2;  // even rounds: thread 0 wrote the lines; odd: thread 1
+        if (t == writer)
+          for (Line& l : lines) l.pad[0] += 1;
+#pragma omp barrier
+        if (t == 0) {
+          const auto t0 = Clock::now();
+          double s = 0;
+          for (std::uint32_t k : order) s += lines[k].pad[0];
+          const double dt = std::chrono::duration<double>(Clock::now() - t0).count();
+          (writer == 0 ? local : remote) = std::min(writer == 0 ? local : remote, dt);
+          sum += s;
+        }
+#pragma omp barrier
+      }
+      if (t == 0 && sum > 0) h.remoteReadRatio = remote / local;
+    }
+  }
+  releaseThreads();
+#endif
+  return h;
 }
 
 }  // namespace woven

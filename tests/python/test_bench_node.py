@@ -1,6 +1,7 @@
 """The bare-node thread benchmark (issue 34) kept from rotting: bench/device_threads.sh's `quick` mode runs
 the cmake-built bench_impact (no YADE) on the tension scene and the struck ply, small, on 1 and 2 threads:
-the same bits at both counts, the per-phase times and speed-ups in its JSON, and the script's table.
+the same bits at both counts, the per-phase times and speed-ups in its JSON, the cores' handoff costs, and
+the script's table.
 A few seconds; the node's own run (`run`) and static build (`build`) are not exercised here."""
 import json
 import os
@@ -31,6 +32,7 @@ def test_device_threads_quick_same_bits(tmp_path):
     assert r.returncode == 0, r.stdout + r.stderr
     table = (tmp_path / 'table.txt').read_text()
     assert 'same bits at every count: yes' in table, table
+    assert len([l for l in table.splitlines() if l.startswith('cores: ')]) == 1, table
     for name, scene in (('tension_20', 'tension'), ('impact_5k', 'impact')):
         s = json.loads((tmp_path / (name + '.json')).read_text())
         assert s['scene'] == scene and s['same_bits'] is True
@@ -41,6 +43,10 @@ def test_device_threads_quick_same_bits(tmp_path):
             assert run['same_bits'] is True and run['bits'] == s['runs'][0]['bits']
             assert len(run['phase_s']) == 6 and all(t >= 0 for t in run['phase_s'])
             assert run['wall_s'] > 0 and run['speedup'] > 0 and run['ideal_speedup'] > 0 and run['steps'] > 0
+        # the cores' handoff costs beside the ideal loop: a line's round trip takes at least the two
+        # stores and loads (tens of ns anywhere), a line another core wrote is never read faster than
+        # by 3x one's own (the ratio of two timings of the same reads: noise, not a cache, below 1)
+        assert s['handoff_round_trip_ns'] > 10 and s['remote_read_ratio'] > 0.33, s
         # one row per count in the table, with its speed-up and the ideal loop's
         assert len([l for l in table.splitlines() if l.startswith(name + ' ')]) == 2, table
 
