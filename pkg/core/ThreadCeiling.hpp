@@ -1,5 +1,6 @@
 // What the cores give: the wall time of an ideal parallel loop (independent arithmetic per item, no
-// memory traffic beyond the first-level cache, no serial part), for the benchmarks' thread speed-ups.
+// memory traffic beyond the first-level cache, no serial part), for the benchmarks' thread speed-ups,
+// and what moving data between two threads costs (coreHandoff), which the ideal loop never pays.
 // On a shared or virtual machine the second core is often not a whole core: measured here
 // 1.33-2.04x for this loop on "2 cores" from one run to the next. A benchmark that times a loop of
 // woven on 1 and N threads times this one beside it, in the same process, and prints both ratios.
