@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <thread>
 #include <vector>
 
 namespace woven {
@@ -64,14 +65,31 @@ inline CoreHandoff coreHandoff() {
   {
     const int t = omp_get_thread_num();
     if (omp_get_num_threads() == 2) {
-      const auto t0 = Clock::now();
-      for (int k = 0; k < kBounces; ++k) {  // thread 0 writes 2k + 1, thread 1 answers 2k + 2
-        if (t == 0) flag.v.store(2 * k + 1, std::memory_order_release);
-        while (flag.v.load(std::memory_order_acquire) != 2 * k + 2 - t) {
+      // Thread 0 writes 2k + 1, thread 1 answers 2k + 2; thread 0 ends the bounces with -1 after
+      // kBounces or 50 ms (two threads on one busy core take a time slice a bounce: the waits
+      // yield after a while, so the measure ends instead of spinning out the slices).
+      const auto wait = [&](auto&& until) {
+        for (int spins = 0; !until(flag.v.load(std::memory_order_acquire)); ++spins)
+          if (spins > 4096) std::this_thread::yield();
+      };
+      if (t == 0) {
+        const auto t0 = Clock::now();
+        int k = 0;
+        double seconds = 0;
+        while (k < kBounces && seconds < 0.05) {
+          flag.v.store(2 * k + 1, std::memory_order_release);
+          wait([k](int v) { return v == 2 * k + 2; });
+          if (++k % 64 == 0 || k == kBounces) seconds = std::chrono::duration<double>(Clock::now() - t0).count();
         }
-        if (t == 1) flag.v.store(2 * k + 2, std::memory_order_release);
+        flag.v.store(-1, std::memory_order_release);
+        h.roundTripNs = 1e9 * seconds / k;
+      } else {
+        for (int v = 0;;) {
+          wait([&v](int now) { return (v = now) == -1 || now % 2 == 1; });
+          if (v == -1) break;
+          flag.v.store(v + 1, std::memory_order_release);
+        }
       }
-      if (t == 0) h.roundTripNs = 1e9 * std::chrono::duration<double>(Clock::now() - t0).count() / kBounces;
 #pragma omp barrier
       for (int r = 0; r < 2 * kRepeats; ++r) {
         const int writer = r % 2;  // even rounds: thread 0 wrote the lines; odd: thread 1
