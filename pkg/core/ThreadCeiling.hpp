@@ -41,7 +41,9 @@ inline double idealLoopSeconds(int nThreads, int rounds) {
 /// same lines written by itself (the best of 5 each). The step hands its data between the threads at
 /// every serial phase (the sweeps) and every gather by node (contacts, rows): where these two are
 /// large, its speed-up stays far below the ideal loop's whatever the loops (docs/design.md,
-/// Threads). NaN without OpenMP or where the region gets fewer than 2 threads.
+/// Threads). Where other processes hold the cores the round trip measures the scheduler instead
+/// (microseconds and more): read it beside the ideal loop of the same run. NaN without OpenMP or
+/// where the region gets fewer than 2 threads.
 struct CoreHandoff {
   double roundTripNs = std::numeric_limits<double>::quiet_NaN();
   double remoteReadRatio = std::numeric_limits<double>::quiet_NaN();
