@@ -24,7 +24,7 @@
 //              the contacts no crossing stands for: side by side, between near-parallel CPs)
 // The step is FabricEngine::step (the engine adapter's work without YADE's own). Built with
 // -DWOVEN_BASELINE against an earlier tree's core (bench/baseline_impact.sh), it runs that core's
-// model on the same scene: the paired runs of the persistent-crossing issue.
+// model on the same scene: paired runs of the persistent-crossing change.
 #include "core/Parallel.hpp"
 #include "core/ThreadCeiling.hpp"
 #include "engine/FabricEngine.hpp"

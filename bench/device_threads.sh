@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 34's thread figures on a bare node (no YADE, no compiler, no network), from one command.
+# The thread figures on a bare node (no YADE, no compiler, no network), from one command.
 #   bash bench/device_threads.sh build          # here: static bench_impact into .device/ (git-ignored)
 #   bash bench/device_threads.sh run [DIR]      # on the node: every measurement, JSON + table into DIR
 #   bash bench/device_threads.sh quick [DIR]    # here: the same harness, tiny sizes, threads 1,2 (seconds)
@@ -97,7 +97,7 @@ measure() {
   table | tee "$dir/table.txt"
   echo "device_threads: $mode took $((SECONDS - t0)) s; same bits at every count: $([ $failed -eq 0 ] && echo yes || echo NO)" \
     | tee -a "$dir/table.txt"
-  if [ "$mode" = run ]; then  # issue 34's goals at 16 threads
+  if [ "$mode" = run ]; then  # the thread goals at 16 threads
     awk '$1 == "tension_200" && $4 == 16 { print "goal: tension 200 yarns, 16 threads: " $6 "x (>= 12x)" }
          $1 == "impact_1e6" && $4 == 16 { print "goal: struck ply 1e6 CPs, 16 threads: " $6 "x (>= 10x)" }' \
       "$dir/table.txt" | tee -a "$dir/table.txt"

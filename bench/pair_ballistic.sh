@@ -1,5 +1,5 @@
 #!/bin/bash
-# The contact issue's speed limit (docs/ballistic.md, "The gap model's cost"): bench_ballistic of a
+# The gap contact model's speed limit (docs/ballistic.md, "The gap model's cost"): bench_ballistic of a
 # baseline build and of this one, alternated N times on the same machine, and each pair's ratio.
 #   bash bench/pair_ballistic.sh OLD_CHECKOUT OLD_PACKAGE_DIR [NEW_PACKAGE_DIR] [N]
 # OLD_CHECKOUT: a worktree of the baseline commit (git worktree add /tmp/old ac50933), whose own

@@ -156,7 +156,7 @@ void saveStatePy(FabricEngine& e, const std::string& path, bool lastGood) {
 }
 void loadStatePy(FabricEngine& e, const std::string& path) {
   // StateIO reads the whole file before it checks it: an endless device (/dev/zero) or a huge file
-  // that is no state ran out of memory (a MemoryError with no message, issue 33). A state file is a
+  // that is no state ran out of memory (a MemoryError with no message). A state file is a
   // regular file that starts with WOVENST: anything else is refused here, naming it, before a byte
   // more is read. (A missing file is left to loadState, which says why it cannot be opened.)
   struct stat st;
@@ -325,7 +325,7 @@ int addBody(FabricEngine& e, long id, bp::object parts, Real mass, const Vec3& i
     require(o.id != id, "id", id, "a YADE body not coupled yet (each body once)");
   bodyStage(e).bodies.push_back(b);
   // A body that starts inside the fabric would be pushed out by the first step's rows and projection
-  // at any cost: refused, naming it (issue 33's fuzz: add_body took one without a word; coupling's
+  // at any cost: refused, naming it (add_body used to take one without a word; coupling's
   // check covered only woven.coupling.couple).
   const int k = static_cast<int>(bodyStage(e).bodies.size()) - 1;
   const Real overlap = bodyStage(e).bodyOverlap(e.fabric(), k);
@@ -425,7 +425,7 @@ bp::object semiAxesPy(FabricEngine& e) {  // a, b per node [m] with the stage's 
 
 // The single-pair helpers take the ranges of the scenes' inputs (README, Parameters): positions within
 // +-1e3 m, sizes up to 1e3 m, velocities up to 1e5 m/s; a step of at most 1 s (woven's are ~1e-8 s).
-// Past them (1e300) the separating-axis arithmetic overflows into inf and NaN answers (issue 33's fuzz).
+// Past them (1e300) the separating-axis arithmetic overflows into inf and NaN answers (found by fuzzing).
 OBB makeObb(const Vec3& c, const Mat3& axes, const Vec3& e) {
   require(c.allFinite() && c.cwiseAbs().maxCoeff() <= 1e3, "centre", c.cwiseAbs().maxCoeff(), "coordinates within +-1e3 m");
   require(axes.allFinite(), "axes", 0, "finite values");

@@ -15,7 +15,7 @@
 #    shows what the machine's cores give (on this shared machine well under N). Both
 #    coupled runs then sweep the rows in `sweep_order` (default 'blocked': slabs of the ply at once on
 #    the threads; 'coloured': colour by colour), not the scene's serial 'sequential'.
-# Prints the figures, the ratio to the baseline and to issue 12's goals (100 us in 3 s; a coupled
+# Prints the figures, the ratio to the baseline and to the speed goals (100 us in 3 s; a coupled
 # CP-step rate of at least 1/30 of the springs-alone rate), and writes
 # out/bench_ballistic/summary.json.
 import json
@@ -34,7 +34,7 @@ from woven.contact import CONTACT_KEYS
 p = read_params({'t_end': (1e-4, 's', 'simulated time of the coupled run'),
                  'chain_steps': (300, '', 'steps of the springs-only baseline'),
                  'side': (0.0508, 'm', 'ply side'), 'cp_per_span': (1, '', 'CPs between crossings (the scene\'s default: 1)'),
-                 'goal_seconds': (3.0, 's', 'goal: wall time for 100 us of simulated time (issue 12)'),
+                 'goal_seconds': (3.0, 's', 'goal: wall time for 100 us of simulated time'),
                  'broad_phase': ('grid', '', "'grid' (the scene's default), 'tree' or 'sap'"),
                  'plies': (1, '', 'plies in the pack, [1, 40] (woven.pack; every ply clamped on 4 edges)'),
                  'ply_angles': ('0', 'deg', 'in-plane angle of each ply, comma-separated (one for all)'),
@@ -68,7 +68,7 @@ if p.shape not in woven.ballistic.SHAPES:
     raise ValueError('shape = %r is invalid: allowed %s' % (p.shape, ', '.join(woven.ballistic.SHAPES)))
 ply_angles = woven.pack.parse_angles(p.ply_angles, p.plies)
 d = out_dir('bench_ballistic', p)
-GOAL_RATE = 1 / 30  # issue 12: the coupled CP-step rate against the springs alone, same process
+GOAL_RATE = 1 / 30  # speed goal: the coupled CP-step rate against the springs alone, same process
 if p.threads > 1 and woven.openmp_threads() < p.threads:
     print('bench_ballistic: WARNING: OpenMP has %d thread(s) here (yade -j %d missing?): idle threads sleep between '
           'regions and the speed-up is understated' % (woven.openmp_threads(), p.threads))
@@ -156,7 +156,7 @@ measured = {'cps': ply.engine.n_elements, 'steps': steps, 'dt': O.dt, 'simulated
             'chain_only_cp_steps_per_second': chain_rate, 'coupled_over_chain': rate / chain_rate,
             'chain_only_seconds_each': chain_runs,
             'projectile_velocity_end': -proj.state.vel[2], 'broken_elements': ply.engine.broken_elements,
-            # the impulse solve over the run (issue 32: unresolved rows after the sweeps, goal < 1 %)
+            # the impulse solve over the run (unresolved rows after the sweeps, goal < 1 %)
             'rows_per_step': solve['total_rows'] / max(solve['steps'], 1),
             'sweeps_per_step': solve['total_sweeps'] / max(solve['steps'], 1),
             'unresolved_fraction': solve['total_unresolved'] / max(solve['total_rows'], 1),

@@ -7,7 +7,7 @@
 # (native_engine_us; its overhead native - bare step), and woven.attach's choice is the native one.
 # It prints and records which woven it measured (package folder, build id, native plugin or why not):
 # a PYTHONPATH that picks another build than meant silently measured the default build's PyRunner
-# (issue 33). native=yes refuses to run without the native engine, naming why.
+# without a word. native=yes refuses to run without the native engine, naming why.
 import os
 import sys
 import time

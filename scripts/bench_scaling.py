@@ -1,4 +1,4 @@
-# How woven's step scales with the fabric (issue 12's scaling chart): wall time per step against the
+# How woven's step scales with the fabric (the scaling chart): wall time per step against the
 # number of CPs, for KM2 706 plies of growing side at one CP per crossing, on one thread:
 #   tension    the warp ends pulled apart at 1 m/s, the weft ends held: every crossing a resting,
 #              persistent contact, nothing moving fast;

@@ -12,7 +12,7 @@
 # message names a mutated key is counted), an unclean error (any other exception type: TypeError,
 # ZeroDivisionError, MemoryError, ...), accepted (then every number the case produced, and the engine's
 # positions, velocities and energy books after a few steps, must be finite: else a silent non-finite
-# state), a crash or a hang. Cases of the classes issue 33's fuzz found accepted know they must be
+# state), a crash or a hang. Cases of the classes an earlier fuzz found accepted know they must be
 # refused (`must_refuse`): a bool for a real argument (a step size), a step outside [0, 1] s or
 # velocities past 1e5 m/s in the single-pair contact helpers (obb_first_contact), a body added, coupled
 # or moved into the fabric, a state path that is a device, a folder or another file (/dev/zero

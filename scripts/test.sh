@@ -5,7 +5,7 @@
 #
 # The sanitizer tier (its own build from scratch, then its run) goes on beside the other two, at a
 # lower priority: the Python tests run one YADE process at a time most of the while, and the two
-# tiers one after the other left a core idle for half of CI's 30 minutes (issue 33). Its output goes
+# tiers one after the other left a core idle for half of CI's 30 minutes. Its output goes
 # to build-asan/tier.log and is shown when it fails. Each tier's time is printed at the end; the exit
 # status is non-zero when any tier fails.
 set -uo pipefail

@@ -11,7 +11,7 @@ struct YarnMaterial {
   Real rho = 1440.0;           ///< fibre density [kg/m^3]
   Real area = 4.63e-8;         ///< load-bearing (fibre) cross-section area of the yarn [m^2]
   Real dampingRatio = 0.0;     ///< xi: c = xi*sqrt(K*m_e) per element [-], damping ratio of the highest chain mode
-  Real failureStrain = 0.05;   ///< strain at break [-] (used by the breakage issue)
+  Real failureStrain = 0.05;   ///< strain at break [-] (used by the breakage model)
   bool tensionOnly = true;     ///< a yarn does not push: no axial force while shorter than its rest length
 
   /// Throws ParameterError naming the bad field and its range.

@@ -242,7 +242,7 @@ void ImpulseLaw::keepVelocities(const Fabric& f) {
 // whose impulse takes back each step the velocity the kick gave, would book (m/2)(a dt)^2 of
 // dissipation every step that the motion never had.) a_n is the node's force over its mass and the
 // body acceleration (gravity, Fabric::bodyAcceleration): with the forces' part alone a contact
-// holding a node up against gravity booked (m/2)(g dt)^2 a step (issue 33; tests/cpp/test_gravity_books).
+// holding a node up against gravity booked (m/2)(g dt)^2 a step (tests/cpp/test_gravity_books).
 // Internal rows (every node free) change no momentum, so the gravity term cancels over their nodes;
 // it counts on rows against a body or a kinematic node.
 // The restitution pass comes after the drift: its dv misses x_{n+1} and first shows in step n+1's
@@ -253,7 +253,7 @@ void ImpulseLaw::keepVelocities(const Fabric& f) {
 Real ImpulseLaw::energyChange(const Fabric& f, bool afterDrift) const {
   const Real half = (afterDrift ? 0.5 : -0.5) * dt_;
   const Vec3 hg = half * f.bodyAcceleration;
-  const bool gravity = hg.squaredNorm() > 0;  // without: the same operations as before issue 33
+  const bool gravity = hg.squaredNorm() > 0;  // without: the same operations as with no gravity term
   return chunkedSum(static_cast<Index>(touched_.size()), 4096, threads(), Real(0), [&](Index k0, Index k1) {
     Real dE = 0;
     for (Index k = k0; k < k1; ++k) {

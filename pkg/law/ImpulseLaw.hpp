@@ -35,8 +35,8 @@
 // same way). Friction's share is its tangential part, -sum_r lambdaT_r . ((u_r + u'_r)/2 - k_r), in row
 // order: the final tangential impulse against the mean slip over the step; the normal impulses' book
 // is the rest, and the two add up to the measured change exactly. The split is a function of the
-// solve's result, not of its path. Until issue 33 each Gauss-Seidel update's increment was split
-// instead, which also closes, but the sweeps push and give back normal and tangential impulse many
+// solve's result, not of its path. Splitting each Gauss-Seidel update's increment instead
+// also closes, but the sweeps push and give back normal and tangential impulse many
 // times a step: in the pull-out at friction 0.15 (4 N) the normal increments' shares were -22.8 and
 // +20.8 mJ against a physical 0.7 mJ, and their residue, -0.5 mJ, booked the normal impulses as
 // putting energy in, with friction taking more than the rows took in all (docs/pullout.md).

@@ -44,7 +44,7 @@ struct RigidBody {
   /// setHostState reads less the one woven left the body with. The energy books count the body's
   /// kinetic energy at its synchronised velocity vel - hostKick/2, as they count the nodes' at
   /// v_{n+1/2} - dt/2 a_n (law/ImpulseLaw): at the half-step velocity, a body resting on the fabric under
-  /// gravity did (M/2)(g dt)^2 of work a step that it never did (issue 33). Not state: taken every
+  /// gravity did (M/2)(g dt)^2 of work a step that it never did. Not state: taken every
   /// step (0 when the host leaves the velocity alone, as without gravity; a velocity set by hand in
   /// the host between two steps counts as that step's kick).
   Vec3 hostKick = Vec3::Zero();

@@ -118,7 +118,7 @@ def _wrap_method(cls_name, name, raw):
 
     fname = '%s.%s' % (cls_name, name) if cls_name else name
     # Boost.Python takes True for a real number (1.0): a bool given for a step size (dt) or any other
-    # real argument ran with 1 (issue 33's fuzz). Refused, naming the argument: a check of the few
+    # real argument ran with 1 (found by fuzzing). Refused, naming the argument: a check of the few
     # real arguments by identity, before the call.
     # The same for a vector given as a list with a bool in it (YADE's converter reads True as 1.0).
     reals = [(k, n, t) for k, (t, n, _) in enumerate(asig) if t in ('float', 'Vector3')]

@@ -1,4 +1,4 @@
-"""Back-face deformation of a struck ply (issue 13): the cone's apex depth and base radius, the
+"""Back-face deformation of a struck ply: the cone's apex depth and base radius, the
 transverse front and the longitudinal strain front along the yarns through the impact point, against
 time; their early speeds against Smith's theory. SI units.
 

@@ -1,4 +1,4 @@
-// A checkpoint is a pure observation (issue 33 part 2): the straight run, the run that saves (state
+// A checkpoint is a pure observation: the straight run, the run that saves (state
 // files and snapshots, several times, while contacts are active and elements break) and the runs
 // resumed from each save are the same bits. The collision stage's memory (persistent crossings,
 // pairs' measure memory, last body contacts) travels in the state file and the snapshot; before, a

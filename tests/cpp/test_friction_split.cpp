@@ -1,7 +1,7 @@
 // How the impulses' energy is split between the normal impulses' book (EnergyBooks::contact) and
-// friction's (issue 33, docs/pullout.md). The split is the final impulses' work at the mean of the
+// friction's (docs/pullout.md). The split is the final impulses' work at the mean of the
 // rows' velocities before and after the solve (law/ImpulseLaw.hpp): a function of what the solve
-// gave, not of the Gauss-Seidel path to it. Split update by update instead (until issue 33), the
+// gave, not of the Gauss-Seidel path to it. Split update by update instead (as it once was), the
 // sweeps' pushes and give-backs left a path-dependent residue: the pull-out at friction 0.15 booked
 // the normal impulses as putting 0.5 mJ in.
 #include "body_util.hpp"

@@ -1,4 +1,4 @@
-// The energy books under gravity (issue 33, docs/collisions.md "Energy books"). The impulse law books
+// The energy books under gravity (docs/collisions.md "Energy books"). The impulse law books
 // an impulse's energy at the synchronised velocity v_n = v_{n+1/2} - dt/2 a_n. With the forces' part
 // of a_n alone, a contact that holds a node up against gravity booked (m/2)(g dt)^2 of dissipation
 // every step that the motion never had; a body the host (YADE) kicks with gravity likewise booked
@@ -55,8 +55,8 @@ Real potential(const FabricEngine& e) {
 // A layer of six straight round yarns (r = 0.1 mm, 12 CPs of 0.25 mm along x, 1 mm apart, damping
 // 0.1, every node free) dropped from 3 um onto a fixed box: it lands at 0.8 ms and rests there for
 // the rest of the 1e5 steps (3 ms). The books close to 1e-6 of the potential energy the layer turned
-// over, and their gravity work is that potential energy (from the positions). Before issue 33 the
-// resting contacts' rows booked (m/2)(g dt)^2 a step: the balance ended 1e-4 of the turnover off,
+// over, and their gravity work is that potential energy (from the positions). Without the gravity term
+// the resting contacts' rows booked (m/2)(g dt)^2 a step: the balance ended 1e-4 of the turnover off,
 // growing with every step. (A plain weave collapses onto a flat box, having no bending stiffness:
 // its crossings fall through tens of um and its tension-only yarns jolt taut and slack, which leaves
 // the leapfrog's own O(dt^2) energy error, ~1e-4 of the turnover, in the balance, unrelated to the
@@ -92,7 +92,7 @@ TEST(GravityBooks, FabricRestingOnABoxKeepsTheBooks) {
 // the pose taken back) kicks it. It lands from 20 nm and rides the yarns, which give ~1 um under
 // it. The work the books say the cube did on the fabric must be what the cube lost: the work of
 // gravity along its path less its kinetic energy gain (both at the synchronised velocity, as the books
-// count the fabric's nodes), to 1e-6 of the potential energy it turned over. Before issue 33 the
+// count the fabric's nodes), to 1e-6 of the potential energy it turned over. Counted at the half-step velocity, the
 // books counted the cube's energy at its half-step velocities: (M/2)(g dt)^2 of work a step that it
 // never did. (tests/python/test_gravity_books.py: the same with YADE's own NewtonIntegrator.)
 TEST(GravityBooks, BodyRestingOnAFabricKeepsTheBooks) {

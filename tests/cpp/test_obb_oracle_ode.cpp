@@ -1,4 +1,4 @@
-// Narrow phase against ODE's box-box collider (Debian's libode, the oracle of the collision issue)
+// Narrow phase against ODE's box-box collider (Debian's libode as the oracle)
 // on 1e5 random pairs, a third yarn-shaped: dBoxTouchesBox and dBoxBox say overlap exactly when we do
 // (pairs within 1e-9 m of touching excepted), and ODE's depth lies in [ours, 1.05 * ours]: ours is
 // the exact 15-axis minimum, ODE prefers a face axis unless an edge axis is 5 % shallower

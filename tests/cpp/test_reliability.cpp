@@ -1,4 +1,4 @@
-// Reliability (issue 14): refused input changes nothing, restarts are bit for bit with breakage and
+// Reliability: refused input changes nothing, restarts are bit for bit with breakage and
 // energy books, state files are checked whole before anything is loaded, writes are atomic and
 // report errors, read-only queries move nothing, absurd physical values are refused.
 #include "body_util.hpp"

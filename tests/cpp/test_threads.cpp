@@ -88,7 +88,7 @@ Outcome tension(int threads, int steps) {
 // The struck ply's runs in Debug and sanitizer builds (chain_util's runLength): a tenth of them, 30
 // steps. The cube breaks its first yarns within 10 steps and every stage's loops run in each step: the
 // sanitizers check the code paths, which the first steps take; the Release run keeps the 300 steps
-// for the bits (issue 33: these runs were 60 % of the sanitizer tier's time).
+// for the bits (these runs were 60 % of the sanitizer tier's time).
 constexpr long kSlowSteps = 10;
 
 // A 40 x 40-yarn ply (one CP per crossing, ~3200 CPs, every yarn end clamped, grid broad phase) and

@@ -296,7 +296,7 @@ def test_bench_adaptive_bad_window_names_the_key(script_server, tmp_path):
 
 
 def test_bench_adaptive_passes_the_projectile_to_both_runs(tmp_path):
-    # the sphere scene of issue 12: shape, size and mass reach both ballistic.py runs
+    # the sphere scene of the speed benchmark: shape, size and mass reach both ballistic.py runs
     rc, log, s = run_scene('bench_adaptive.py', tmp_path, 'quick=1', 'cp_fine=2', 'fine_radius=3e-3', 't_end=2e-6',
                            'shape=sphere', 'size=3e-3', 'mass=2.5e-4')
     for run in ('uniform', 'adaptive'):
@@ -338,7 +338,7 @@ def test_the_check_takes_out_what_the_flattening_left(tmp_path):
     # before the rows and reports what it met, and with the check off (-1) they reach the rows and
     # the reported overlap. The books close either way.
     # 15 us of the 100 (the breaks and the overlaps come within it: measured 17 check steps, the check
-    # meeting 0.057 thickness, 0.033 with it off; issue 33's CI time)
+    # meeting 0.057 thickness, 0.033 with it off; CI time)
     keys = ('shape=box', 'size=0.003', 'mass=0.000212', 'V=1000', 'cp_per_span=2', 'side=0.0127', 'stop=0', 't_end=1.5e-5')
     for name in ('on', 'off'):
         (tmp_path / name).mkdir()

@@ -1,4 +1,4 @@
-"""The bare-node thread benchmark (issue 34) kept from rotting: bench/device_threads.sh's `quick` mode runs
+"""The bare-node thread benchmark kept from rotting: bench/device_threads.sh's `quick` mode runs
 the cmake-built bench_impact (no YADE) on the tension scene and the struck ply, small, on 1 and 2 threads:
 the same bits at both counts, the per-phase times and speed-ups in its JSON, the cores' handoff costs, and
 the script's table.

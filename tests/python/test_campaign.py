@@ -15,7 +15,7 @@ from conftest import ROOT, run_refused
 # simulation per run, the rest is YADE's start. Weibull modulus 3 scatters the yarn strengths enough
 # that the seeds change the residual velocity (38-56 m/s at 80 m/s, measured) and V50 (~60 m/s).
 SCENE = 'side=0.00635 size=2e-3 mass=0.2e-3 samples=10 clear_steps=20 energy_limit=0.05'
-# 8 velocities x 2 seeds: 16 runs (40 with 5 seeds until issue 33 shrank CI; the fit, the kill and
+# 8 velocities x 2 seeds: 16 runs (5 seeds, 40 runs, took too long for CI; the fit, the kill and
 # resume, and the Dask comparison need both outcomes and more runs than a kill catches at once).
 KEYS = ['velocities=40,50,55,60,65,70,80,100', 'seeds=1,2', 'weibull_m=3', 't_end=6e-5',
         'scene=%s' % SCENE, 'boot=100']
@@ -101,7 +101,7 @@ def test_killed_campaign_resumes_without_redoing_finished_runs(local_campaign):
 def test_dask_local_cluster_gives_the_same_bits(local_campaign, tmp_path):
     # The Dask backend makes six of the local campaign's runs again (the three slowest that perforated,
     # the three fastest that did not: both outcomes, nearest the V50), the other ten copied as
-    # finished: 6 runs instead of 16 (issue 33's CI time), and the fit still over all 16.
+    # finished: 6 runs instead of 16 (CI time), and the fit still over all 16.
     pytest.importorskip('distributed')
     out_local = local_campaign[0]
     a = summaries(out_local)

@@ -17,7 +17,7 @@ def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp('compare')
     # quick=1 with the stability map at 1000 m/s and of the impulse and penalty methods only (the cells the
     # test below checks), the adaptive cases at one fine radius (the default is two): 45 YADE processes
-    # instead of 80, and 8 us of impact instead of quick's 15 (in contact from ~2 us; issue 33's CI time)
+    # instead of 80, and 8 us of impact instead of quick's 15 (in contact from ~2 us; CI time)
     rc, log, s = run_scene('compare.py', out, 'quick=1', 'map_speeds=1000', 'map_methods=impulse,penalty',
                            'fine_radii=%s' % ','.join(map(str, FINE_RADII)), 't_end=8e-6', timeout=1500)
     return out, rc, log, s

@@ -1,5 +1,5 @@
-"""The commands the documentation shows work as written (issue 33: the README's main job failed its
-own check with its defaults, and nothing ran it).
+"""The commands the documentation shows work as written (once the README's main job failed
+its own check with its defaults, and nothing ran it).
 
 - The main job, `yade -n -x scripts/smith.py`, runs with no keys and passes its checks.
 - Every other command the README shows runs, as written or, where it takes too long for CI, with the

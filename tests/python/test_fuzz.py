@@ -1,8 +1,8 @@
 """The fuzz test's quick subset (scripts/fuzz.py): 200 generated cases of the public Python API (and
 four scene runs with a mutated key), each in a worker process that is restarted after a crash. No
 case may crash, hang or leave a non-finite state without an error; the errors must be ValueError /
-RuntimeError naming what was wrong (the full run, 2000 cases, is in docs and the issue report).
-The classes issue 33's outside fuzz found accepted (a bool for a step size, absurd steps in the
+RuntimeError naming what was wrong (the full run, 2000 cases, is in the README).
+The classes an earlier outside fuzz found accepted (a bool for a step size, absurd steps in the
 single-pair contact helpers, a body inside the fabric, /dev/zero as a state) are among the cases,
 each knowing it must be refused: none may be accepted."""
 import json

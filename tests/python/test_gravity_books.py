@@ -1,4 +1,4 @@
-"""A YADE body resting on a fabric under YADE's gravity (issue 33): the energy books count the body's
+"""A YADE body resting on a fabric under YADE's gravity: the energy books count the body's
 kinetic energy at its synchronised velocity, from the kick YADE's NewtonIntegrator gave it between
 two woven steps (RigidBody::hostKick). The oracle is YADE's side of the body: gravity's work along
 its path less its kinetic energy gain is what it did on the fabric. tests/cpp/test_gravity_books.cpp

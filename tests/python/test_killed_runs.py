@@ -1,4 +1,4 @@
-"""Killed runs (issue 14): a write killed half-way leaves the previous file whole; a scene killed with
+"""Killed runs: a write killed half-way leaves the previous file whole; a scene killed with
 SIGKILL mid-run runs again into the same out= and completes; a yade-batch sweep killed mid-way
 resumes without redoing its finished runs (woven.output.out_dir); every writer of the scripts and
 the package goes through woven.output's atomic writers."""

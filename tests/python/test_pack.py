@@ -1,4 +1,4 @@
-"""Multi-ply packs and standard projectiles (issue 13, parts 1-2): bad keys refused naming the key and
+"""Multi-ply packs and standard projectiles: bad keys refused naming the key and
 its range, a small 2-ply pack built apart with its per-ply books summing to the engine's entries, the
 cylinder's mass and inertia against the closed form, the RCC and FSP in a short impact."""
 import math
@@ -47,7 +47,7 @@ def test_two_ply_pack_starts_apart_and_its_books_sum_to_the_total(tmp_path):
     assert sum(b['broken_elements'] for b in books) == m['broken_elements']
     assert sum(b['broken_yarns'] for b in books) == m['broken_yarns']
     assert books[0]['touched_by_projectile'] and books[0]['absorbed'] > 0
-    # Overlaps within the contact issue's limits, energy closed.
+    # Overlaps within the contact model's limits, energy closed.
     assert m['overlap']['yarn_max_before_break_rel'] <= 0.1 and m['overlap']['body_max_before_break_rel'] <= 0.1
     assert abs(m['energy_balance_error']) <= 0.01
     assert m['projectile']['mass'] == pytest.approx(7850 * math.pi * 2.794e-3 ** 2 * 5.588e-3, rel=1e-12)

@@ -73,7 +73,7 @@ def test_energy_books_of_the_pull_close(sweep):
             assert E['friction'] > 0, case
         if case[1] == 0:
             assert E['friction'] == 0, case
-        # the normal impulses take energy (issue 33: split update by update, at 4 N and friction 0.15
+        # the normal impulses take energy (split update by update, as once, at 4 N and friction 0.15
         # their book ended at -0.50 mJ, friction's at 1.02 mJ; split by the final impulses, 0.08 and 0.44)
         if case[0] > 0:
             assert E['dissipated_contacts'] > 0, (case, E)

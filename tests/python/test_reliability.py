@@ -1,4 +1,4 @@
-"""Reliability (issue 14) from Python: refused input changes nothing and does not crash later, state
+"""Reliability from Python: refused input changes nothing and does not crash later, state
 files round-trip the books and refuse bad contents, writes report errors, queries move nothing,
 absurd values and wrong types are refused naming the argument, nothing is attached or coupled twice."""
 import math
@@ -237,7 +237,7 @@ def test_oversized_scenes_are_refused_up_front(script_server, tmp_path, script, 
     assert 'ValueError: %s = ' % key in last and 'allowed' in last and 'MemoryError' not in log, last
 
 
-# --- issue 33: what an outside fuzz found accepted ---
+# --- what an outside fuzz found accepted ---
 def test_a_bool_is_no_step_size(yade_ns):
     import woven
     from yade import Vector3, Matrix3
