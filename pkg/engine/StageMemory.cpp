@@ -1,7 +1,8 @@
 // What the collision stage carries from one step to the next, as bytes (CollisionStage::memory):
 // the persistent crossings, each CP pair's measure memory (model Gap) or carried contact (model Paper),
-// the body contacts of the last step (the measure memory of the next), the section springs' rest
-// shape and the statistics. State files and snapshots keep it, so that saving a run is a pure
+// the body contacts of the last step (the measure memory of the next), the velocities the fabric left
+// each body with (the host's kick of the next step is measured from them: RigidBody::hostKick), the
+// section springs' rest shape and the statistics. State files and snapshots keep it, so that saving a run is a pure
 // observation and a run continued from a save is the saving run, bit for bit (before, both sides
 // forgot the memory at a save: the saving run then differed from the straight one).
 // The crossings and the pair memory go field by field; the carried contacts, body contacts and
@@ -16,7 +17,10 @@ namespace woven {
 
 namespace {
 
-constexpr char kMemoryMagic[4] = {'W', 'S', 'M', '1'};
+// WSM2 adds the bodies' velocities after the body contacts; WSM1 (without them) is read too, and its
+// bodies keep the velocities they have.
+constexpr char kMemoryMagic[4] = {'W', 'S', 'M', '2'};
+constexpr char kMemoryMagic1[4] = {'W', 'S', 'M', '1'};
 
 [[noreturn]] void memoryFails(const std::string& what) {
   throw ParameterError("state", "contact memory: " + what, "the memory a woven collision stage wrote");
@@ -34,6 +38,7 @@ struct CollisionStage::Memory {
   std::vector<long> sectionStamp;
   std::size_t heldFor = 0;
   std::vector<BodyContact> held;
+  Vec3Array bodyVel, bodyAngVel;  // per body at the save (empty: a WSM1 memory)
   std::vector<Real> restFlat;
   Vec3Array restDir;
   std::vector<CollisionStats> stats;
@@ -68,6 +73,9 @@ std::string CollisionStage::memory() const {
   o.sized(sectionStamp_);
   o.put(static_cast<std::uint64_t>(bodies.size()));
   o.sized(bodyContacts_);  // the next step's measure memory
+  // Without them a continued run's first host kick would be the body's whole velocity change since
+  // the bodies were coupled, and the books (body work, contact, work) would part from the straight run.
+  for (const RigidBody& b : bodies) o.put(b.vel), o.put(b.angVel);
   o.sized(restFlat_);
   o.sized(restDir_);
   o.sized(std::vector<CollisionStats>{stats});
@@ -75,7 +83,8 @@ std::string CollisionStage::memory() const {
 }
 
 CollisionStage::Memory CollisionStage::parseMemory(const Fabric& f, const std::string& bytes) const {
-  if (bytes.size() < 4 || std::memcmp(bytes.data(), kMemoryMagic, 4) != 0) memoryFails("no WSM1 header");
+  const bool v2 = bytes.size() >= 4 && std::memcmp(bytes.data(), kMemoryMagic, 4) == 0;
+  if (!v2 && (bytes.size() < 4 || std::memcmp(bytes.data(), kMemoryMagic1, 4) != 0)) memoryFails("no WSM2 or WSM1 header");
   ByteReader in(bytes, 4, memoryFails);
   Memory m;
   const Index ne = f.nElems();
@@ -110,6 +119,14 @@ CollisionStage::Memory CollisionStage::parseMemory(const Fabric& f, const std::s
   m.layout &= in.sized(m.sectionStamp);
   m.heldFor = in.get<std::uint64_t>();
   m.layout &= in.sized(m.held);
+  if (v2) {
+    if (m.heldFor > in.left() / (6 * sizeof(Real))) in.fail("body velocities past the end");
+    m.bodyVel.resize(m.heldFor), m.bodyAngVel.resize(m.heldFor);
+    for (std::size_t k = 0; k < m.heldFor; ++k) {
+      m.bodyVel[k] = in.get<Vec3>(), m.bodyAngVel[k] = in.get<Vec3>();
+      if (!(m.bodyVel[k].allFinite() && m.bodyAngVel[k].allFinite())) in.fail("a body velocity not finite");
+    }
+  }
   m.layout &= in.sized(m.restFlat);
   m.layout &= in.sized(m.restDir);
   m.layout &= in.sized(m.stats);
@@ -146,6 +163,9 @@ bool CollisionStage::setMemory(const Fabric& f, const std::string& bytes) {
   cacheClock_ = m.cacheClock;
   sectionStamp_ = std::move(m.sectionStamp);
   bodyContacts_ = std::move(m.held), heldFor_ = m.heldFor, forgetHeld_ = false;
+  // The same bodies as the saving run's (a state saved before a body was coupled leaves it as it is).
+  if (m.bodyVel.size() == bodies.size())
+    for (std::size_t k = 0; k < bodies.size(); ++k) bodies[k].vel = m.bodyVel[k], bodies[k].angVel = m.bodyAngVel[k];
   restFlat_ = std::move(m.restFlat), restDir_ = std::move(m.restDir);
   if (!m.stats.empty()) stats = m.stats[0];
   pairsValid_ = false, pairsChanged_ = true;
