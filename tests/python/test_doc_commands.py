@@ -111,8 +111,9 @@ def test_the_docs_show_the_commands_this_test_expects():
                           'weibull_m=10', 'seed=3'], None) in readme
     assert ('smith', [], 'smith') in readme
     assert ('campaign', ['jobs=2', 'scene=pictures=0 backface=0'], None) in readme
-    assert {c[0] for c in ALL} >= {'README.md', 'docs/pullout.md', 'docs/campaign.md', 'docs/compare.md',
-                                   'docs/yade_native.md', 'docs/yade_grid.md'}
+    assert {c[0] for c in ALL} >= {'README.md', 'docs/README.md', 'docs/history.md', 'docs/pullout.md',
+                                   'docs/campaign.md', 'docs/compare.md', 'docs/yade_native.md',
+                                   'docs/yade_grid.md', 'docs/weave.md', 'docs/chain.md'}
     assert len(ALL) > 60
 
 
