@@ -165,6 +165,53 @@ def sample():
     phase['F_sum'], phase['F_n'] = 0.0, 0
     rows.append((O.time, X[grip][0] - phase['x_grip0'], F, X[far][0] - X0[far][0],
                  s['contacts'], s['penetration']))
+    census.append(crossing_census())
+
+
+pe0 = pinfo['first_element']
+pe1 = pe0 + pinfo['n_elements']
+weft_elems = [(eng.yarn(y)['first_element'], eng.yarn(y)['first_element'] + eng.yarn(y)['n_elements'], eng.yarn(y)['first_node'])
+              for y in w.weft_yarns]
+
+
+def _angle(u, v):
+    return math.acos(max(-1.0, min(1.0, float(np.dot(u, v) / (np.linalg.norm(u) * np.linalg.norm(v))))))
+
+
+def crossing_census():
+    """The wefts that press on the pulled yarn now: (sum of their normal forces from each weft's
+    tension and its turning there, 2 T sin(psi / 2) [N]; the pulled yarn's own turning at them [rad];
+    wefts counted; their mean tension [N]). A weft presses where one of its CPs touches the pulled
+    yarn (the contact list, or the persistent crossings of the gap model); psi is the angle between
+    its CPs one before and one after that CP, T the mean tension of the three."""
+    X = woven.positions(eng)
+    Tn = woven.arrays.tensions(eng)
+    pairs = [(int(r[0]), int(r[1])) for r in woven.arrays.contacts(eng)]
+    pairs += [(int(r[0]), int(r[2])) for r in woven.arrays.crossings(eng)]
+    touched = {}  # weft CP -> a pulled-yarn CP it touches
+    for a, b in pairs:
+        if pe0 <= a < pe1 and not pe0 <= b < pe1:
+            touched.setdefault(b, a)
+        elif pe0 <= b < pe1 and not pe0 <= a < pe1:
+            touched.setdefault(a, b)
+    N_geo, turn, n, T_sum, seen = 0.0, 0.0, 0, 0.0, set()
+    for other, mine in sorted(touched.items()):
+        for e0, e1, n0 in weft_elems:
+            if e0 < other < e1 - 1 and (e0, other - 1) not in seen and (e0, other + 1) not in seen:
+                seen.add((e0, other))
+                i = n0 + (other - e0)  # element k joins nodes n0 + (k - e0) and the next one
+                psi = _angle(X[i] - X[i - 1], X[i + 2] - X[i + 1])
+                T = float(np.mean(Tn[other - 1:other + 2]))
+                N_geo += 2 * T * math.sin(0.5 * psi)
+                T_sum += T
+                n += 1
+                j = pinfo['first_node'] + (mine - pe0)
+                if pinfo['first_node'] < j and j + 2 < pinfo['first_node'] + pinfo['n_nodes']:
+                    turn += _angle(X[j] - X[j - 1], X[j + 2] - X[j + 1])
+    return N_geo, turn, n, T_sum / n if n else 0.0
+
+
+census = []  # (grip displacement [m], census) at each curve row
 
 
 def drive():
@@ -231,6 +278,21 @@ savetxt(os.path.join(d, 'curve.csv'), C, delimiter=',', comments='',
 measured = {'steps': O.iter, 'dt': dt, 'wall_seconds': wall, 'crossings': crossings, 'settle_overlap': settle_left,
             'strip_length': length_x, 'yarns': eng.n_yarns, 'cps': eng.n_elements}
 checks = {}
+
+
+def crossing_summary(ipk):
+    """The wefts' normal forces on the pulled yarn at the row of the peak, and the closed forms."""
+    if ipk >= len(census):
+        return None
+    N_geo, turn, n, T_mean = census[ipk]
+    return {'wefts_pressing': n, 'weft_tension_mean': T_mean, 'normal_force_sum': N_geo,
+            'pulled_yarn_turning': turn,
+            # Coulomb at each crossing: the grip pulls the back tension plus mu times the normal forces.
+            'coulomb_estimate': p.back_tension + p.friction * N_geo,
+            # Capstan on the pulled yarn's own turning: its tension grows by exp(mu psi) at each crossing.
+            'capstan_estimate': p.back_tension * math.exp(p.friction * turn)}
+
+
 thickness = min(eng.yarn(w.warp_yarns[0])['thickness'], eng.yarn(w.weft_yarns[0])['thickness'])
 if phase['E_pull0'] is not None and len(C) > 5:
     disp, F = C[:, 1], C[:, 2]
@@ -254,6 +316,7 @@ if phase['E_pull0'] is not None and len(C) > 5:
     far_moved = float(X1[far][0] - X0[far][0])
     measured.update({
         'peak_force': float(F_avg.max()), 'peak_displacement': float(disp[ipk]), 'peak_force_raw': float(F.max()),
+        'crossing_normal_forces': crossing_summary(ipk),
         'smoothing_samples': n_avg,
         'mean_force': energy_curve / float(disp[-1]) if disp[-1] > 0 else 0.0,
         'pullout_energy': energy_curve, 'grip_work_books': W_grip, 'back_tension_work': W_back,
@@ -321,7 +384,14 @@ units = {'peak_force': 'N', 'peak_force_raw': 'N', 'peak_displacement': 'm', 'me
          'energy': 'J', 'energy_balance_error': 'fraction of the energy turnover of the pull', 'final_overlap': 'm',
          'max_transient_penetration': 'm', 'coulomb_estimate_peak_force': 'N', 'weave_angle': 'rad', 'dt': 's',
          'wall_seconds': 's', 'settle_overlap': 'm', 'strip_length': 'm'}
+units['crossing_normal_forces'] = 'N (sums and closed-form forces), rad (turning)'
 write_summary(d, 'pullout', p, measured, reference, units, status, checks)
+cn = measured.get('crossing_normal_forces')
+if cn:
+    print('pullout: at the peak %d wefts (mean tension %.3g N) press with %.4g N in all: back tension + mu N = %.4g N; '
+          'capstan on the pulled yarn\'s turning %.3g rad: %.4g N' % (cn['wefts_pressing'], cn['weft_tension_mean'],
+                                                                   cn['normal_force_sum'], cn['coulomb_estimate'],
+                                                                   cn['pulled_yarn_turning'], cn['capstan_estimate']))
 print('pullout: %s; pre-tension %.3g N, friction %.3g: peak %.4g N at %.3g mm, energy %.4g mJ, balance %.2g %%, '
       '%d steps in %.1f s -> %s' % (status, p.pretension, p.friction, measured.get('peak_force', float('nan')),
                                      1e3 * measured.get('peak_displacement', float('nan')),
