@@ -92,3 +92,25 @@ def test_stl_round_trip(tmp_path, binary):
     bad.write_text('not an stl')
     with pytest.raises(ValueError, match='junk.stl'):
         mesh.read_stl(str(bad))
+
+
+def test_make_meshes_script(tmp_path):
+    """scripts/make_meshes.py writes closed STLs: the ~2000-triangle 9 mm bullet of 8.0 g and the RCC,
+    whose mesh mass is the 48-gon's share of the exact cylinder's (n/(2 pi) sin(2 pi/n))."""
+    from conftest import run_scene
+    from woven import projectiles
+    rc, out, _ = run_scene('make_meshes.py', tmp_path, timeout=120)
+    assert rc == 0, out
+    v, t = mesh.read_stl(str(tmp_path / 'bullet9mm.stl'))
+    mesh.check_closed(t)
+    assert 1800 <= len(t) <= 2200
+    m, cm, _ = mesh.mass_properties(v, t, mass=8.0e-3)
+    assert m == pytest.approx(8.0e-3)
+    assert 0 < cm[2] < 15.6e-3 / 2  # the nose is lighter than the base
+    v, t = mesh.read_stl(str(tmp_path / 'rcc.stl'))
+    mesh.check_closed(t)
+    m, _, _ = mesh.mass_properties(v, t, density=projectiles.STEEL_DENSITY)
+    n = 48
+    assert m == pytest.approx(projectiles.solid('rcc')['mass'] * n / (2 * math.pi) * math.sin(2 * math.pi / n), rel=1e-5)
+    rc, out, _ = run_scene('make_meshes.py', tmp_path, 'segments=3', timeout=120)
+    assert rc != 0 and 'segments = 3 is invalid' in out
