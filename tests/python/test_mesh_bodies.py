@@ -114,3 +114,34 @@ def test_make_meshes_script(tmp_path):
     assert m == pytest.approx(projectiles.solid('rcc')['mass'] * n / (2 * math.pi) * math.sin(2 * math.pi / n), rel=1e-5)
     rc, out, _ = run_scene('make_meshes.py', tmp_path, 'segments=3', timeout=120)
     assert rc != 0 and 'segments = 3 is invalid' in out
+
+
+def test_wall_stops_the_fabric(yade_ns):
+    """A YADE Wall (sense +1) under a ply, moving up at 20 m/s as a kinematic body, lifts the ply
+    without letting it through; a two-sided wall (sense 0) is refused naming sense."""
+    import woven
+    from yade import utils, Vector3
+    O = yade_ns.O
+    O.reset()
+    O.engines = []
+    w = woven.weave(preset='km2_706', nx=3, ny=3, cp_per_span=2)
+    e = w.engine
+    woven.contact.enable(e, position_correction=0)
+    e.settle_sections()
+    X = woven.positions(e)
+    z0 = X[:, 2].min() - 0.2e-3
+    bad = O.bodies.append(utils.wall((0, 0, z0), axis=2, sense=0))
+    with pytest.raises(ValueError, match='sense = 0 of wall'):
+        woven.coupling.couple(e, [bad])
+    wid = O.bodies.append(utils.wall((0, 0, z0), axis=2, sense=1))
+    O.bodies[wid].state.vel = Vector3(0, 0, 20.0)
+    woven.coupling.couple(e, [wid])
+    O.engines = [yade_ns.wrapper.ForceResetter(), yade_ns.wrapper.NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
+    woven.attach(e)
+    O.run(400, True)
+    zw = O.bodies[wid].state.pos[2]
+    assert zw > z0 + 1e-4  # the wall moved up into where the ply was
+    kin = np.array([e.is_kinematic(i) for i in range(e.n_nodes)])
+    vz = woven.velocities(e)[~kin, 2]
+    assert vz.mean() > 1.0  # the ply was pushed up
+    assert e.collision_stats()['max_body_penetration'] < 0.05e-3
