@@ -145,3 +145,19 @@ def test_wall_stops_the_fabric(yade_ns):
     vz = woven.velocities(e)[~kin, 2]
     assert vz.mean() > 1.0  # the ply was pushed up
     assert e.collision_stats()['max_body_penetration'] < 0.05e-3
+
+
+def test_ballistic_backing_wall(tmp_path):
+    """ballistic.py backing=wall: a fixed wall below the pack, reported in the summary; the run keeps
+    its energy books. Bad values are refused naming the key and its range."""
+    from conftest import run_scene
+    rc, out, s = run_scene('ballistic.py', tmp_path, 'side=0.004', 't_end=3e-6', 'V=100', 'backing=wall',
+                           'backing_standoff=1e-4', 'progress=0', 'vtk_every=-1', timeout=120)
+    assert rc == 0, out
+    b = s['measured']['backing']
+    assert b['kind'] == 'wall' and b['standoff'] == pytest.approx(1e-4) and b['z'] < 0
+    assert abs(s['measured']['energy_balance_error']) < 1e-3
+    for arg, key in (('backing=plate', 'backing'), ('backing_standoff=0', 'backing_standoff'),
+                     ('backing_standoff=1', 'backing_standoff')):
+        rc, out, _ = run_scene('ballistic.py', tmp_path, arg, 'side=0.004', 't_end=1e-7', timeout=120)
+        assert rc != 0 and ('%s = ' % key) in out and 'is invalid: allowed' in out, out
