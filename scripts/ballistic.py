@@ -73,6 +73,8 @@ defaults.update({
     'broad_phase': ('grid', '', CONTACT_KEYS['broad_phase'][2]),
     'side': (0.0508, 'm', 'side of the square ply (yarns = side / spacing, rounded to whole pattern repeats)'),
     'clamp': (4, '', 'edges held: 4 (every yarn end), 2 (warp ends only), 0 (free); every ply alike'),
+    'backing': ('none', '', "'none' or 'wall': a fixed YADE Wall (a rigid plane) backing_standoff below the pack"),
+    'backing_standoff': (5e-3, 'm', 'gap between the lowest yarn section and the backing wall, (0, 0.1] m'),
     'plies': (1, '', 'plies in the pack, [1, 40] (woven.pack: copies of the ply stacked below the first)'),
     'ply_gap': (-1.0, 'm', 'clear gap between neighbouring plies, [0, 0.01] m; -1: one yarn thickness'),
     'ply_angles': ('0', 'deg', "in-plane angle of each ply about the ply's centre, comma-separated (one for all), "
@@ -165,6 +167,12 @@ if not 1 <= p.plies <= woven.pack.MAX_PLIES:
 if not (math.isfinite(p.ply_gap) and (0 <= p.ply_gap <= 0.01 or p.ply_gap == -1)):
     bad('ply_gap', '[0, 0.01] m, or -1 (one yarn thickness)')
 ply_angles = woven.pack.parse_angles(p.ply_angles, p.plies)  # names ply_angles and its range
+if p.backing not in ('none', 'wall'):
+    bad('backing', "'none' or 'wall'")
+if not (math.isfinite(p.backing_standoff) and 0 < p.backing_standoff <= 0.1):
+    bad('backing_standoff', '(0, 0.1] m')
+if p.backing != 'none' and p.model == 'yade':
+    bad('backing', "'none' with model yade")
 if not (math.isfinite(p.standoff) and p.standoff > 0):
     bad('standoff', '(0, inf) m: the projectile starts clear of the ply')
 if not (math.isfinite(p.t_end) and 0 < p.t_end <= 0.01):
@@ -245,6 +253,15 @@ X0, thickness, z_mid = ply.X0, ply.thickness, ply.z_mid
 proj = woven.ballistic.add_projectile(ply, p.shape, mass, size, p.V, p.standoff, p.yaw, p.obliquity, solid)
 # How far it reaches below and above its centre of mass at the start (the nose, and the rear that
 # must pass the last ply): half the cube's edge or the sphere's radius in the scene as it was.
+backing_id = None
+if p.backing == 'wall':
+    # A rigid backing: a fixed plane (YADE Wall, acting upwards) below the pack's lowest section; the
+    # fabric meets it as the face of a box (woven.coupling._parts_of).
+    Xb = woven.positions(eng)
+    z_wall = float(Xb[:, 2].min()) - thickness - p.backing_standoff
+    backing_id = O.bodies.append(utils.wall((ply.centre[0], ply.centre[1], z_wall), axis=2, sense=1))
+    O.bodies[backing_id].dynamic = False
+    woven.coupling.couple(eng, [backing_id])
 low, high = woven.ballistic.projectile_extent(p.shape, size, proj.state.ori, solid)
 if p.shape in ('box', 'sphere') and p.yaw == 0 and p.obliquity == 0:
     low = high = 0.5 * size
@@ -475,6 +492,8 @@ measured = {
     'energy_guard': guard.summary(),
 }
 measured['max_iterations'] = contact_args['max_iterations']
+measured['backing'] = {'kind': p.backing, 'standoff': p.backing_standoff if backing_id is not None else None,
+                       'z': float(O.bodies[backing_id].state.pos[2]) if backing_id is not None else None}
 measured['projectile'] = {'shape': p.shape, 'mass': mass, 'size': size, 'yaw': p.yaw, 'obliquity': p.obliquity,
                           'inertia': list(proj.state.inertia), 'start_reach_below': low, 'start_reach_above': high}
 if solid is not None:

@@ -1,4 +1,4 @@
-"""YADE bodies that collide with the fabric: a projectile, clamps, any Box, Sphere or clump of these.
+"""YADE bodies that collide with the fabric: a projectile, clamps, any Box, Sphere, Wall or clump of these.
 
     pid = O.bodies.append(utils.box(centre, half_extents))
     woven.coupling.couple(engine, [pid])     # before woven.attach(engine)
@@ -15,6 +15,7 @@ import yade.wrapper
 from yade._minieigenHP import Quaternion, Vector3
 
 _O = yade.wrapper.Omega()
+WALL_DEPTH = 10.0  # [m] half-size of the box that stands for a YADE Wall (see _parts_of)
 
 
 def _parts_of(body):
@@ -27,13 +28,29 @@ def _parts_of(body):
         return [('box', shape.extents, zero, I)]
     if kind == 'Sphere':
         return [('sphere', shape.radius, zero, I)]
+    if kind == 'Wall':
+        # YADE's Wall is the infinite plane through the body's position normal to the global axis
+        # `axis`, acting on the side `sense`. For the fabric it is the face of a box behind the plane
+        # (the box form takes the face that leaves the CP the most room: this one, the others lie
+        # WALL_DEPTH away), fixed in the global frame. WALL_DEPTH bounds the rounding of the gap to
+        # 1e-16 WALL_DEPTH = 1e-15 m.
+        if shape.sense not in (-1, 1):
+            raise ValueError('sense = %r of wall %d is invalid: allowed -1 or +1 (the side the fabric is on)'
+                             % (shape.sense, body.id))
+        if shape.axis not in (0, 1, 2):
+            raise ValueError('axis = %r of wall %d is invalid: allowed 0, 1 or 2' % (shape.axis, body.id))
+        inv = body.state.ori.conjugate()
+        n = Vector3.Zero
+        n[shape.axis] = 1.0
+        half = Vector3(WALL_DEPTH, WALL_DEPTH, WALL_DEPTH)
+        return [('box', half, inv * (-shape.sense * WALL_DEPTH * n), inv)]
     if kind == 'Clump':
         parts = []
         for mid, (rel_pos, rel_ori) in sorted(shape.members.items()):
             sub = _parts_of(_O.bodies[mid])
             parts += [(k, size, rel_pos + rel_ori * off, rel_ori * ori) for (k, size, off, ori) in sub]
         return parts
-    raise ValueError('body %d has shape %s: woven collides yarns with Box, Sphere and clumps of these' % (body.id, kind))
+    raise ValueError('body %d has shape %s: woven collides yarns with Box, Sphere, Wall and clumps of these' % (body.id, kind))
 
 
 def couple(engine, ids, parts=None):

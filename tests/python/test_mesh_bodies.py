@@ -1,0 +1,163 @@
+"""woven.mesh: the STL reader, the closedness check and the mass properties of a closed triangle
+mesh (Eberly's polyhedral mass properties) against solids in closed form: a cube off the origin, the
+regular n-gon prism exactly, and a round cylinder as the n-gon's limit."""
+import math
+
+import numpy as np
+import pytest
+
+from woven import mesh
+
+
+def cube(a, centre):
+    v = np.array([[x, y, z] for x in (0, a) for y in (0, a) for z in (0, a)], float) - a / 2 + np.asarray(centre)
+    # outward faces of the unit cube, corners indexed x*4 + y*2 + z
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    t = [(q[0], q[1], q[2]) for q in quads] + [(q[0], q[2], q[3]) for q in quads]
+    return v, np.array(t)
+
+
+def test_cube_closed_form():
+    a, rho, c = 0.02, 7800.0, (0.3, -0.1, 0.05)
+    v, t = cube(a, c)
+    mesh.check_closed(t)
+    m, cm, inertia = mesh.mass_properties(v, t, density=rho)
+    assert m == pytest.approx(rho * a ** 3, rel=1e-12)
+    assert np.allclose(cm, c, atol=1e-14)
+    # the products come out as the difference of moments about the origin and m c c (parallel axis):
+    # exact to the rounding of those, 1e-10 of the moments
+    assert np.allclose(inertia, np.eye(3) * m * a * a / 6, rtol=1e-10, atol=1e-10 * m * a * a)
+
+
+def test_prism_exact_and_cylinder_limit():
+    r, h, rho = 3.5e-3, 7.0e-3, 7850.0
+    for n, tol in ((64, None), (512, 1e-4)):
+        v, t = mesh.revolve([(0, -h / 2), (r, -h / 2), (r, h / 2), (0, h / 2)], n)
+        mesh.check_closed(t)
+        m, cm, inertia = mesh.mass_properties(v, t, density=rho)
+        # regular n-gon: area (n/2) r^2 sin(2 pi/n), polar moment (n r^4/12) sin(2 pi/n) (2 + cos(2 pi/n))
+        s, co = math.sin(2 * math.pi / n), math.cos(2 * math.pi / n)
+        area = n / 2 * r * r * s
+        assert m == pytest.approx(rho * area * h, rel=1e-12)
+        assert np.allclose(cm, 0, atol=1e-15)
+        assert inertia[2, 2] == pytest.approx(rho * h * n * r ** 4 / 12 * s * (2 + co), rel=1e-10)
+        assert inertia[0, 0] == pytest.approx(inertia[1, 1], rel=1e-10)
+        assert inertia[0, 0] == pytest.approx(inertia[2, 2] / 2 + m * h * h / 12, rel=1e-10)
+        if tol:  # the round cylinder: m = rho pi r^2 h, I_zz = m r^2 / 2, I_xx = m (3 r^2 + h^2) / 12
+            mc = rho * math.pi * r * r * h
+            assert m == pytest.approx(mc, rel=tol)
+            assert inertia[2, 2] == pytest.approx(mc * r * r / 2, rel=tol)
+            assert inertia[0, 0] == pytest.approx(mc * (3 * r * r + h * h) / 12, rel=tol)
+
+
+def test_mass_given_and_refusals():
+    v, t = cube(0.01, (0, 0, 0))
+    m, _, _ = mesh.mass_properties(v, t, mass=8.0e-3)
+    assert m == pytest.approx(8.0e-3)
+    with pytest.raises(ValueError, match='mass = -1'):
+        mesh.mass_properties(v, t, mass=-1)
+    with pytest.raises(ValueError, match='exactly one'):
+        mesh.mass_properties(v, t)
+    with pytest.raises(ValueError, match='open'):
+        mesh.check_closed(t[:-1], name='mesh = box.stl')
+    flipped = t.copy()
+    flipped[0] = flipped[0][::-1]
+    with pytest.raises(ValueError, match='non-manifold'):
+        mesh.check_closed(flipped)
+
+
+@pytest.mark.parametrize('binary', [True, False])
+def test_stl_round_trip(tmp_path, binary):
+    v, t = mesh.revolve([(0, 0), (1.0, 0), (1.0, 2.0), (0, 3.0)], 24)
+    path = tmp_path / 'part.stl'
+    if binary:
+        mesh.write_stl(str(path), v, t)
+    else:
+        with open(path, 'w') as fh:
+            fh.write('solid part\n')
+            for tri in t:
+                fh.write(' facet normal 0 0 0\n  outer loop\n')
+                for k in tri:
+                    fh.write('   vertex %.17g %.17g %.17g\n' % tuple(v[k]))
+                fh.write('  endloop\n endfacet\n')
+            fh.write('endsolid part\n')
+    v2, t2 = mesh.read_stl(str(path), scale=1e-3)
+    mesh.check_closed(t2)
+    m1, c1, i1 = mesh.mass_properties(v * 1e-3, t, density=1000)
+    m2, c2, i2 = mesh.mass_properties(v2, t2, density=1000)
+    rel = 1e-6 if binary else 1e-12  # binary STL stores float32
+    assert m2 == pytest.approx(m1, rel=rel)
+    assert np.allclose(i2, i1, rtol=10 * rel, atol=1e-6 * abs(i1).max())
+    bad = tmp_path / 'junk.stl'
+    bad.write_text('not an stl')
+    with pytest.raises(ValueError, match='junk.stl'):
+        mesh.read_stl(str(bad))
+
+
+def test_make_meshes_script(tmp_path):
+    """scripts/make_meshes.py writes closed STLs: the ~2000-triangle 9 mm bullet of 8.0 g and the RCC,
+    whose mesh mass is the 48-gon's share of the exact cylinder's (n/(2 pi) sin(2 pi/n))."""
+    from conftest import run_scene
+    from woven import projectiles
+    rc, out, _ = run_scene('make_meshes.py', tmp_path, timeout=120)
+    assert rc == 0, out
+    v, t = mesh.read_stl(str(tmp_path / 'bullet9mm.stl'))
+    mesh.check_closed(t)
+    assert 1800 <= len(t) <= 2200
+    m, cm, _ = mesh.mass_properties(v, t, mass=8.0e-3)
+    assert m == pytest.approx(8.0e-3)
+    assert 0 < cm[2] < 15.6e-3 / 2  # the nose is lighter than the base
+    v, t = mesh.read_stl(str(tmp_path / 'rcc.stl'))
+    mesh.check_closed(t)
+    m, _, _ = mesh.mass_properties(v, t, density=projectiles.STEEL_DENSITY)
+    n = 48
+    assert m == pytest.approx(projectiles.solid('rcc')['mass'] * n / (2 * math.pi) * math.sin(2 * math.pi / n), rel=1e-5)
+    rc, out, _ = run_scene('make_meshes.py', tmp_path, 'segments=3', timeout=120)
+    assert rc != 0 and 'segments = 3 is invalid' in out
+
+
+def test_wall_stops_the_fabric(yade_ns):
+    """A YADE Wall (sense +1) under a ply, moving up at 20 m/s as a kinematic body, lifts the ply
+    without letting it through; a two-sided wall (sense 0) is refused naming sense."""
+    import woven
+    from yade import utils, Vector3
+    O = yade_ns.O
+    O.reset()
+    O.engines = []
+    w = woven.weave(preset='km2_706', nx=3, ny=3, cp_per_span=2)
+    e = w.engine
+    woven.contact.enable(e, position_correction=0)
+    e.settle_sections()
+    X = woven.positions(e)
+    z0 = X[:, 2].min() - 0.2e-3
+    bad = O.bodies.append(utils.wall((0, 0, z0), axis=2, sense=0))
+    with pytest.raises(ValueError, match='sense = 0 of wall'):
+        woven.coupling.couple(e, [bad])
+    wid = O.bodies.append(utils.wall((0, 0, z0), axis=2, sense=1))
+    O.bodies[wid].state.vel = Vector3(0, 0, 20.0)
+    woven.coupling.couple(e, [wid])
+    O.engines = [yade_ns.wrapper.ForceResetter(), yade_ns.wrapper.NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
+    woven.attach(e)
+    O.run(400, True)
+    zw = O.bodies[wid].state.pos[2]
+    assert zw > z0 + 1e-4  # the wall moved up into where the ply was
+    kin = np.array([e.is_kinematic(i) for i in range(e.n_nodes)])
+    vz = woven.velocities(e)[~kin, 2]
+    assert vz.mean() > 1.0  # the ply was pushed up
+    assert e.collision_stats()['max_body_penetration'] < 0.05e-3
+
+
+def test_ballistic_backing_wall(tmp_path):
+    """ballistic.py backing=wall: a fixed wall below the pack, reported in the summary; the run keeps
+    its energy books. Bad values are refused naming the key and its range."""
+    from conftest import run_scene
+    rc, out, s = run_scene('ballistic.py', tmp_path, 'side=0.004', 't_end=3e-6', 'V=100', 'backing=wall',
+                           'backing_standoff=1e-4', 'progress=0', 'vtk_every=-1', timeout=120)
+    assert rc == 0, out
+    b = s['measured']['backing']
+    assert b['kind'] == 'wall' and b['standoff'] == pytest.approx(1e-4) and b['z'] < 0
+    assert abs(s['measured']['energy_balance_error']) < 1e-3
+    for arg, key in (('backing=plate', 'backing'), ('backing_standoff=0', 'backing_standoff'),
+                     ('backing_standoff=1', 'backing_standoff')):
+        rc, out, _ = run_scene('ballistic.py', tmp_path, arg, 'side=0.004', 't_end=1e-7', timeout=120)
+        assert rc != 0 and ('%s = ' % key) in out and 'is invalid: allowed' in out, out
