@@ -12,6 +12,7 @@ import os
 import numpy as np
 
 from woven import mesh, projectiles
+from woven.output import write_text_atomic
 from woven.params import read_params
 
 BULLET = {'diameter': 9.02e-3, 'length': 15.6e-3, 'nose_length': 7.0e-3, 'mass': 8.0e-3}  # [m], [kg]
@@ -46,6 +47,5 @@ info = {'bullet9mm': {'triangles': len(t), 'mass': m, 'density': m / (mesh.mass_
                       'centre_of_mass': cm.tolist(), 'inertia': np.diag(inertia).tolist()},
         'rcc': {'triangles': len(tc), 'mass': mc, 'exact_mass': rcc['mass'], 'centre_of_mass': ccm.tolist(),
                 'inertia': np.diag(ic).tolist()}}
-with open(os.path.join(p.out, 'meshes.json'), 'w') as fh:
-    json.dump(info, fh, indent=1)
+write_text_atomic(os.path.join(p.out, 'meshes.json'), json.dumps(info, indent=1))
 print(json.dumps(info, indent=1))

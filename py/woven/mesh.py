@@ -110,7 +110,8 @@ def write_stl(path, vertices, triangles, name='woven'):
     n = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
     rec['n'] = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
     rec['v'] = v[t]
-    with open(path, 'wb') as fh:
+    from .output import atomic_open
+    with atomic_open(path, 'wb') as fh:
         fh.write(name.encode('ascii')[:80].ljust(80, b' '))
         fh.write(struct.pack('<I', len(t)))
         fh.write(rec.tobytes())
