@@ -251,17 +251,16 @@ ply = woven.ballistic.build_ply(weave_args, contact_args, side=p.side,
 w, eng, settle_left = ply.weave, ply.engine, ply.settle_left
 X0, thickness, z_mid = ply.X0, ply.thickness, ply.z_mid
 proj = woven.ballistic.add_projectile(ply, p.shape, mass, size, p.V, p.standoff, p.yaw, p.obliquity, solid)
-# How far it reaches below and above its centre of mass at the start (the nose, and the rear that
-# must pass the last ply): half the cube's edge or the sphere's radius in the scene as it was.
 backing_id = None
 if p.backing == 'wall':
     # A rigid backing: a fixed plane (YADE Wall, acting upwards) below the pack's lowest section; the
     # fabric meets it as the face of a box (woven.coupling._parts_of).
-    Xb = woven.positions(eng)
-    z_wall = float(Xb[:, 2].min()) - thickness - p.backing_standoff
+    z_wall = float(X0[:, 2].min()) - thickness - p.backing_standoff
     backing_id = O.bodies.append(utils.wall((ply.centre[0], ply.centre[1], z_wall), axis=2, sense=1))
     O.bodies[backing_id].dynamic = False
     woven.coupling.couple(eng, [backing_id])
+# How far it reaches below and above its centre of mass at the start (the nose, and the rear that
+# must pass the last ply): half the cube's edge or the sphere's radius in the scene as it was.
 low, high = woven.ballistic.projectile_extent(p.shape, size, proj.state.ori, solid)
 if p.shape in ('box', 'sphere') and p.yaw == 0 and p.obliquity == 0:
     low = high = 0.5 * size

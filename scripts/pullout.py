@@ -170,8 +170,8 @@ def sample():
 
 pe0 = pinfo['first_element']
 pe1 = pe0 + pinfo['n_elements']
-weft_elems = [(eng.yarn(y)['first_element'], eng.yarn(y)['first_element'] + eng.yarn(y)['n_elements'], eng.yarn(y)['first_node'])
-              for y in w.weft_yarns]
+weft_elems = [(i['first_element'], i['first_element'] + i['n_elements'], i['first_node'])
+              for i in (eng.yarn(y) for y in w.weft_yarns)]
 
 
 def _angle(u, v):
