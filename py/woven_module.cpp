@@ -314,7 +314,16 @@ int addBody(FabricEngine& e, long id, bp::object parts, Real mass, const Vec3& i
       p.radius = dims[0], p.halfLength = dims[1], p.chiselAngle = dims[2], p.landHalfWidth = dims[3];
       require(bodyStage(e).params().model == ContactModel::Gap, "parts", 0,
               "box or sphere parts with contact_model 'paper' (a cylinder has the gap model's form only)");
-    } else throw ParameterError("parts", "'" + kind + "'", "'box', 'sphere' or 'cylinder' parts");
+    } else if (kind == "triangle" || kind == "facet") {
+      // ('triangle' | 'facet', (v0, v1, v2), offset, ori): a closed mesh's face (outward by the
+      // corners' order: counter-clockwise seen from outside) or a lone facet, outside on both faces.
+      p.type = RigidPart::Type::Triangle, p.twoSided = kind == "facet";
+      bp::object v = t[1];
+      require(bp::len(v) == 3, "parts", static_cast<Real>(bp::len(v)), "a triangle's three corners (v0, v1, v2) [m]");
+      for (int k = 0; k < 3; ++k) p.vert[k] = bp::extract<Vec3>(v[k]);
+      require(bodyStage(e).params().model == ContactModel::Gap, "parts", 0,
+              "box or sphere parts with contact_model 'paper' (a triangle has the gap model's form only)");
+    } else throw ParameterError("parts", "'" + kind + "'", "'box', 'sphere', 'cylinder', 'triangle' or 'facet' parts");
     p.offset = bp::extract<Vec3>(t[2]);
     p.ori = bp::extract<Quat>(t[3]);
     b.parts.push_back(p);
@@ -700,8 +709,10 @@ BOOST_PYTHON_MODULE(_woven) {
            (bp::arg("id"), bp::arg("parts"), bp::arg("mass"), bp::arg("inertia"), bp::arg("pos"), bp::arg("ori"),
             bp::arg("vel"), bp::arg("ang_vel")),
            "Adds a rigid body the fabric collides with (needs collisions on): YADE body id, parts [('box', "
-           "half_extents [m], offset [m], Quaternion) or ('sphere', radius [m], offset, Quaternion)] in the body "
-           "frame, mass [kg] (0 or inf: kinematic), principal inertia [kg m^2], pos [m], ori, vel [m/s], "
+           "half_extents [m], offset [m], Quaternion), ('sphere', radius [m], offset, Quaternion), ('cylinder', "
+           "(radius, half_length, chisel_angle, land_half_width), offset, Quaternion), ('triangle', (v0, v1, v2), "
+           "offset, Quaternion) (a closed mesh's face, counter-clockwise from outside) or ('facet', (v0, v1, v2), "
+           "offset, Quaternion) (a lone facet, both faces outside)] in the body frame, mass [kg] (0 or inf: kinematic), principal inertia [kg m^2], pos [m], ori, vel [m/s], "
            "ang_vel [rad/s]. Returns its index.")
       .add_property("n_bodies", +[](FabricEngine& e) { return e.collisions() ? static_cast<int>(e.collisions()->bodies.size()) : 0; })
       .def("body", &bodyDict, (bp::arg("index")), "dict: id, mass, inertia, pos, ori, vel, ang_vel, kinetic_energy [J], parts")
@@ -720,6 +731,10 @@ BOOST_PYTHON_MODULE(_woven) {
           const RigidPart& q = b.parts[i];
           if (q.type == RigidPart::Type::Cylinder)
             out.append(bp::make_tuple("cylinder", bp::make_tuple(q.radius, q.halfLength, q.chiselAngle, q.landHalfWidth),
+                                      b.partCentre(i), rows));
+          else if (q.type == RigidPart::Type::Triangle)
+            out.append(bp::make_tuple(q.twoSided ? "facet" : "triangle",
+                                      bp::make_tuple(b.partVertex(i, 0), b.partVertex(i, 1), b.partVertex(i, 2)),
                                       b.partCentre(i), rows));
           else if (q.type == RigidPart::Type::Box) out.append(bp::make_tuple("box", b.parts[i].halfSize, b.partCentre(i), rows));
           else out.append(bp::make_tuple("sphere", b.parts[i].radius, b.partCentre(i), rows));

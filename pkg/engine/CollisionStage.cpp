@@ -273,8 +273,7 @@ const std::uint8_t* CollisionStage::markRowable(Real horizon) {
                  }).value;
   for (const RigidBody& b : bodies) {
     Real reach = 0;  // the body's farthest surface point from its centre (bound)
-    for (const RigidPart& q : b.parts)
-      reach = std::max(reach, q.offset.norm() + std::max({q.halfSize.norm(), std::hypot(q.radius, q.halfLength)}));
+    for (std::size_t k = 0; k < b.parts.size(); ++k) reach = std::max(reach, b.parts[k].offset.norm() + b.partReach(k));
     fastest = std::max(fastest, b.vel.norm() + b.angVel.norm() * reach);
   }
   const Real room = params_.margin + 2 * horizon * fastest;

@@ -76,6 +76,7 @@ std::string engineSnapshot(FabricEngine& e) {
       {
         o.put(q.type), o.put(q.halfSize), o.put(q.radius), o.put(q.offset), o.put(q.ori.coeffs().eval());
         if (q.type == RigidPart::Type::Cylinder) o.put(q.halfLength), o.put(q.chiselAngle), o.put(q.landHalfWidth);
+        if (q.type == RigidPart::Type::Triangle) o.put(q.vert[0]), o.put(q.vert[1]), o.put(q.vert[2]), o.put(std::uint8_t(q.twoSided));
       }
       o.put(b.mass), o.put(b.inertia), o.put(b.pos);
       o.put(b.ori.coeffs().eval()), o.put(b.vel), o.put(b.angVel);
@@ -162,6 +163,10 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
         q.offset = in.get<Vec3>(), q.ori.coeffs() = in.get<Eigen::Matrix<Real, 4, 1>>();
         if (q.type == RigidPart::Type::Cylinder)  // written only for cylinders: older snapshots have none
           q.halfLength = in.get<Real>(), q.chiselAngle = in.get<Real>(), q.landHalfWidth = in.get<Real>();
+        if (q.type == RigidPart::Type::Triangle) {
+          for (Vec3& v : q.vert) v = in.get<Vec3>();
+          q.twoSided = in.get<std::uint8_t>() != 0;
+        }
       }
       b.mass = in.get<Real>();
       b.inertia = in.get<Vec3>(), b.pos = in.get<Vec3>(), b.ori.coeffs() = in.get<Eigen::Matrix<Real, 4, 1>>();

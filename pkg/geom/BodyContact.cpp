@@ -95,7 +95,8 @@ bool sphereContact(const Fabric& f, Index cp, const RigidBody& body, int part, R
 bool cpBodyContact(const Fabric& f, const OBB& cpBox, Index cp, const RigidBody& body, int part, Real dt, Real margin,
                    SectionRule rule, BodyContact& out) {
   out.cp = cp, out.part = part;
-  if (body.parts[part].type == RigidPart::Type::Cylinder) return false;  // refused at add_body: gap model only
+  const RigidPart::Type type = body.parts[part].type;
+  if (type == RigidPart::Type::Cylinder || type == RigidPart::Type::Triangle) return false;  // refused at add_body: gap model only
   return body.parts[part].type == RigidPart::Type::Box ? boxContact(f, cpBox, cp, body, part, dt, margin, rule, out)
                                                        : sphereContact(f, cp, body, part, dt, margin, rule, out);
 }

@@ -2,7 +2,9 @@
 #include "shape/Cylinder.hpp"
 #include "bound/CPBound.hpp"
 #include "geom/SegmentDistance.hpp"
+#include "geom/SegmentTriangle.hpp"
 #include "geom/YarnCurve.hpp"
+#include "shape/Triangle.hpp"
 #include <algorithm>
 #include <cmath>
 
@@ -489,6 +491,65 @@ int cylinderGap(const Fabric& f, Index cp, const RigidBody& body, int part, Sect
   return count;
 }
 
+// Triangle form (the separating-plane form, shape/Triangle.hpp): the CP's axis segment and the
+// triangle's closest points (geom/SegmentTriangle, Eberly), s* on the axis; n the unit vector from
+// the axis point to the triangle's (the plane through the triangle's closest point normal to n
+// supports the triangle, so min over it of y.n is that point's), or, where the axis lies behind a
+// closed mesh's face (the closest point on the face from inside, or the axis through the face), n
+// = -(outward normal) and the deepest of the axis points over the face (its ends, s*) is the one
+// held. g = min over the triangle of y.n - (x(s).n + support(s, n)), n held in the part frame and s
+// held for the step: dg/dx_k = -w_k n, w = (1 - s, s), the rows of the sphere form.
+template <class Listed>
+int triangleGap(const Fabric& f, Index cp, const RigidBody& body, int part, SectionRule rule, BodyContact c,
+                BodyContact out[2], const BodyContact* held, const Listed& listed) {
+  const Index i = f.elem0[cp];
+  const RigidPart& q = body.parts[part];
+  const Vec3 a = body.partVertex(part, 0), b = body.partVertex(part, 1), v2 = body.partVertex(part, 2);
+  const Vec3 outward = (b - a).cross(v2 - a).normalized();
+  const Vec3 &x0 = f.pos[i], &x1 = f.pos[i + 1];
+  const SegmentTriangleClosest sc = closestSegmentTriangle(x0, x1, a, b, v2);
+  const Vec3 toTri = sc.onTriangle - sc.onSegment;
+  Real s = sc.s;
+  Vec3 n;
+  const bool through = !(sc.distance > kTinyDistance);
+  if (!q.twoSided && (through || (sc.feature == TriangleFeature::Face && toTri.dot(outward) > 0))) {
+    // Behind the face of a closed mesh: pushed out along the outward normal from its deepest point.
+    n = -outward;
+    Real deepest = (x0 + s * (x1 - x0) - a).dot(outward);
+    for (Real e : {0.0, 1.0}) {
+      const Vec3 x = e == 0 ? x0 : x1;
+      const Vec3 bary = detail::closestPointTriangleBary(x, a, b, v2);
+      const Real depth = (x - a).dot(outward);
+      if (detail::featureOf(bary) == TriangleFeature::Face && depth < deepest) deepest = depth, s = e;
+    }
+  } else if (through) {
+    // A lone facet through the axis: the side the pair was on (held), else the side of the end that
+    // lies farther from the plane, which the shorter end is pushed back to.
+    const Real h0 = (x0 - a).dot(outward), h1 = (x1 - a).dot(outward);
+    const Real side = held ? -(body.partAxes(part) * held->localNormal).dot(outward)
+                           : (std::abs(h0) >= std::abs(h1) ? h0 : h1);
+    n = side >= 0 ? Vec3(-outward) : outward;
+    s = (side >= 0) == (h0 >= 0) ? 1.0 : 0.0;  // the end on the wrong side
+  } else {
+    n = toTri / sc.distance;
+  }
+  const Vec3 local = body.partAxes(part).transpose() * n;
+  const SectionAt sec = sectionAt(f, cp, s, rule);
+  const Real room = triangleMinAlong(a, b, v2, n) - sec.centre.dot(n);
+  const Real full = ellipseSupport(sec.u, sec.d, sec.a, sec.b, n);
+  // The measure memory (capMeasure's rule): the section may reach into room the triangle leaves,
+  // beyond its support at the last step along the same normal (new: its half-thickness).
+  const bool sameFace = held && held->localNormal.dot(local) > 0.999;
+  const Real support = std::min(full, std::max(sameFace ? held->support[0] : sec.b, room));
+  c.s = s, c.normal = n, c.localNormal = local;
+  c.support[0] = support, c.support[1] = 0, c.held = full - support;
+  c.gap = room - support;
+  c.point = sec.centre + support * n;
+  if (!listed(c)) return 0;
+  out[0] = c;
+  return 1;
+}
+
 }  // namespace
 
 int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
@@ -549,6 +610,7 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
   }
   if (body.parts[part].type == RigidPart::Type::Cylinder)
     return cylinderGap(f, cp, body, part, rule, c, out, tangent, held, listed);
+  if (body.parts[part].type == RigidPart::Type::Triangle) return triangleGap(f, cp, body, part, rule, c, out, held, listed);
   // The face of the box that leaves the CP the most room (the separating-axis choice among the
   // box's faces), then one contact per end section: a level CP under a face is held at both ends.
   const OBB box = body.partBox(part);
@@ -603,6 +665,15 @@ void remeasureBody(const Fabric& f, const RigidBody& body, BodyContact& c) {
     const int node = c.s > 0.5 ? 1 : 0;
     c.gap = cylinderGapAt(f, c.cp, body, c.part, c.normal, c.localNormal, c, node);
     c.point = f.pos[i + node] + c.support[node] * c.normal;
+    return;
+  }
+  if (body.parts[c.part].type == RigidPart::Type::Triangle) {
+    c.normal = body.partAxes(c.part) * c.localNormal;
+    const Vec3 x = (1 - c.s) * f.pos[i] + c.s * f.pos[i + 1];
+    const Real corner =
+        triangleMinAlong(body.partVertex(c.part, 0), body.partVertex(c.part, 1), body.partVertex(c.part, 2), c.normal);
+    c.gap = corner - x.dot(c.normal) - c.support[0];
+    c.point = x + c.support[0] * c.normal;
     return;
   }
   const OBB box = body.partBox(c.part);

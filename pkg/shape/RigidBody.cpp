@@ -1,6 +1,7 @@
 #include "shape/RigidBody.hpp"
 #include "core/Errors.hpp"
 #include "shape/Cylinder.hpp"
+#include <algorithm>
 #include <cmath>
 
 namespace woven {
@@ -8,13 +9,20 @@ namespace woven {
 // Physical ranges, not only finiteness: a velocity of 1e300 m/s or an infinite inertia passed a
 // finiteness or sign check and turned into NaN at the first impulse (README, Parameters).
 void RigidBody::validate() const {
-  require(!parts.empty(), "parts", 0, "at least one Box, Sphere or Cylinder part");
+  require(!parts.empty(), "parts", 0, "at least one Box, Sphere, Cylinder or Triangle part");
   const auto unit = [](const Quat& q) { return q.coeffs().allFinite() && std::abs(q.norm() - 1) < 1e-6; };
   for (const RigidPart& p : parts) {
     if (p.type == RigidPart::Type::Box)
       require(p.halfSize.allFinite() && p.halfSize.minCoeff() >= 1e-9 && p.halfSize.maxCoeff() <= 10, "extents",
               p.halfSize.allFinite() ? p.halfSize.minCoeff() : NAN, "[1e-9, 10] m on every axis");
-    else
+    else if (p.type == RigidPart::Type::Triangle) {
+      bool finite = true;
+      Real far = 0;
+      for (const Vec3& v : p.vert) finite = finite && v.allFinite(), far = std::max(far, v.norm());
+      require(finite && far <= 10, "triangle", finite ? far : NAN, "corners finite, within 10 m of the part centre");
+      const Real area = 0.5 * (p.vert[1] - p.vert[0]).cross(p.vert[2] - p.vert[0]).norm();
+      require(area >= 1e-18, "triangle", area, "an area >= 1e-18 m^2 (three corners not on one line)");
+    } else
       require(std::isfinite(p.radius) && p.radius >= 1e-9 && p.radius <= 10, "radius", p.radius, "[1e-9, 10] m");
     if (p.type == RigidPart::Type::Cylinder) validateCylinder(p);
     require(p.offset.allFinite() && p.offset.norm() <= 10, "offset", p.offset.norm(), "finite, |offset| <= 10 m");

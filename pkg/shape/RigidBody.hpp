@@ -8,8 +8,11 @@
 // tensor in the body's principal frame, `ori` turns that frame into the global one.
 #pragma once
 #include "bound/OBB.hpp"
+#include "shape/Triangle.hpp"
 #include "core/Types.hpp"
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace woven {
@@ -19,13 +22,20 @@ using Quat = Eigen::Quaternion<Real>;
 struct RigidPart {
   // Cylinder: YADE has no such body; a standard projectile (RCC, FSP) is a YADE body whose mass and
   // inertia are those of this exact solid, shown in YADE by a stand-in shape (shape/Cylinder.hpp).
-  enum class Type : std::uint8_t { Box = 0, Sphere = 1, Cylinder = 2 };
+  // Triangle: one face of a mesh (a YADE Facet, a clump of them, an STL solid: shape/Triangle.hpp).
+  enum class Type : std::uint8_t { Box = 0, Sphere = 1, Cylinder = 2, Triangle = 3 };
   Type type = Type::Box;
   Vec3 halfSize = Vec3::Zero();  ///< box half-extents in the part frame [m] (YADE Box.extents)
   Real radius = 0;               ///< sphere or cylinder radius [m]
   Real halfLength = 0;           ///< cylinder: half its length along the part's z axis [m]
   Real chiselAngle = 0;          ///< cylinder: angle of the chisel nose's two flats to the axis [rad]; 0: none
   Real landHalfWidth = 0;        ///< cylinder with a chisel: half-width of the flat tip the flats leave [m]
+  /// Triangle: its corners in the part frame [m], counter-clockwise seen from outside: the face
+  /// normal (v1 - v0) x (v2 - v0) points out of the solid the mesh closes.
+  Vec3 vert[3] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  /// Triangle: a lone facet, outside on both faces (a YADE Facet, an open sheet); false: a face of a
+  /// closed mesh, whose inside is behind it (an axis found behind the face is an overlap to push out).
+  bool twoSided = false;
   Vec3 offset = Vec3::Zero();    ///< part centre in the body frame [m]
   Quat ori = Quat::Identity();   ///< part frame in the body frame
 };
@@ -59,13 +69,25 @@ struct RigidBody {
     const Mat3 R = ori.toRotationMatrix();
     return R * d.asDiagonal() * R.transpose();
   }
+  /// Farthest point of part k from its own centre [m] (a bound for its travel as the body turns).
+  Real partReach(std::size_t k) const {
+    const RigidPart& p = parts[k];
+    if (p.type == RigidPart::Type::Triangle)
+      return std::max({p.vert[0].norm(), p.vert[1].norm(), p.vert[2].norm()});
+    return std::max(p.halfSize.norm(), std::hypot(p.radius, p.halfLength));
+  }
+  /// Corner j of triangle part k in the global frame [m].
+  Vec3 partVertex(std::size_t k, int j) const { return pos + ori * (parts[k].offset + parts[k].ori * parts[k].vert[j]); }
   /// Velocity of the body's material point at p [m/s].
   Vec3 velocityAt(const Vec3& p) const { return vel + angVel.cross(p - pos); }
   /// Part k in the global frame: its centre and axes.
   Vec3 partCentre(std::size_t k) const { return pos + ori * parts[k].offset; }
   Mat3 partAxes(std::size_t k) const { return (ori * parts[k].ori).toRotationMatrix(); }
-  /// The OBB of a box part, or the cube around a sphere part (for the broad phase).
+  /// The OBB of a box part, the cube around a sphere part, the box around a cylinder, the flat box
+  /// of a triangle (for the broad phase).
   OBB partBox(std::size_t k) const {
+    if (parts[k].type == RigidPart::Type::Triangle)
+      return triangleBox(partVertex(k, 0), partVertex(k, 1), partVertex(k, 2));
     OBB b;
     b.centre = partCentre(k);
     b.axes = partAxes(k);

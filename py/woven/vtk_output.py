@@ -93,12 +93,19 @@ def yarn_tubes(engine, rings=8):
 
 
 def body_surfaces(engine):
-    """vtkPolyData of the coupled rigid bodies' parts (boxes, spheres, cylinders) at their current pose."""
+    """vtkPolyData of the coupled rigid bodies' parts (boxes, spheres, cylinders, triangles) at their current pose."""
     vtk, _ = _vtk()
     app = vtk.vtkAppendPolyData()
     count = 0
+    tri = vtk.vtkPolyData()  # the meshes' triangles, as they are (corners in the global frame)
+    tri_points, tri_cells = vtk.vtkPoints(), vtk.vtkCellArray()
     for k in range(engine.n_bodies):
         for (kind, size, centre, axes) in engine._body_parts(k):
+            if kind in ('triangle', 'facet'):
+                tri_cells.InsertNextCell(3)
+                for v in size:
+                    tri_cells.InsertCellPoint(tri_points.InsertNextPoint(v[0], v[1], v[2]))
+                continue
             if kind == 'box':
                 src = vtk.vtkCubeSource()
                 src.SetXLength(2 * size[0]), src.SetYLength(2 * size[1]), src.SetZLength(2 * size[2])
@@ -123,6 +130,10 @@ def body_surfaces(engine):
             f.Update()
             app.AddInputData(f.GetOutput())
             count += 1
+    if tri_cells.GetNumberOfCells():
+        tri.SetPoints(tri_points), tri.SetPolys(tri_cells)
+        app.AddInputData(tri)
+        count += 1
     if count == 0:
         return vtk.vtkPolyData()
     app.Update()
