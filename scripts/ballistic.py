@@ -1,5 +1,5 @@
 # Ballistic impact of a rigid projectile on a single ply (paper Sec. 6.2) or a pack, run inside YADE's loop.
-#   yade -n -x scripts/ballistic.py [V=200] [shape=box|sphere|rcc|fsp] [mass=1.1e-3] [size=5.59e-3] [side=0.0508]
+#   yade -n -x scripts/ballistic.py [V=200] [shape=box|sphere|rcc|fsp|mesh [mesh=FILE.stl]] [mass=1.1e-3] [size=5.59e-3] [side=0.0508]
 #                                   [clamp=4] [plies=1] [ply_gap=-1] [ply_angles=0,45] [yaw=0] [obliquity=0]
 #                                   [t_end=1e-4] [state=FILE] [vtk_every=N] [out=DIR] ...
 # Packs and the standard projectiles (RCC, FSP as exact cylinder parts): docs/ballistic.md.
@@ -34,6 +34,7 @@ import woven.backface
 import woven.render
 import woven.pack
 import woven.projectiles
+import woven.mesh
 from woven.overlap import OverlapMeter
 import woven.overlap
 import woven.yade_grid
@@ -82,12 +83,16 @@ defaults.update({
     'state': ('', '', 'initial state file of the same weave (e.g. pretensioned.state of tension.py); empty: at rest'),
     'V': (200.0, 'm/s', 'impact speed, normal to the ply'),
     'shape': ('box', '', "'box' (a cube, face on, as the paper's OBB-bounded projectile), 'sphere', 'rcc' (0.22-calibre "
-              "right circular cylinder) or 'fsp' (17-grain 0.22-calibre fragment simulator, chisel nose): woven.projectiles"),
-    'mass': (1.1e-3, 'kg', 'projectile mass, (0, 10] kg (default: a 0.22-calibre, 17-grain fragment simulator); rcc and '
-             'fsp when not given: density x the exact solid\'s volume'),
+              "right circular cylinder), 'fsp' (17-grain 0.22-calibre fragment simulator, chisel nose): woven.projectiles, "
+              "or 'mesh' (a closed STL solid: mesh=FILE)"),
+    'mesh': ('', '', 'shape mesh: the STL file of a closed, outward-oriented solid (scripts/make_meshes.py writes a 9 mm bullet and the RCC)'),
+    'mesh_scale': (1.0, '', 'shape mesh: factor from the file\'s units to metres, (0, 1e3] (1e-3 for a file in mm)'),
+    'nose_axis': ('+z', '', "shape mesh: the file's axis that points along the flight: +x, -x, +y, -y, +z or -z"),
+    'mass': (1.1e-3, 'kg', 'projectile mass, (0, 10] kg (default: a 0.22-calibre, 17-grain fragment simulator); rcc, '
+             'fsp and mesh when not given: density x the exact solid\'s (the mesh\'s) volume'),
     'size': (5.59e-3, 'm', 'cube edge or sphere diameter, [1e-4, 0.1] m (default: 0.22 calibre); rcc: its diameter = '
              'length, 5.588e-3 when not given; fsp: fixed by its drawing (not to be given)'),
-    'density': (7850.0, 'kg/m^3', 'rcc and fsp material density, [1000, 20000] (steel)'),
+    'density': (7850.0, 'kg/m^3', 'rcc, fsp and mesh material density, [1000, 20000] (steel)'),
     'yaw': (0.0, 'deg', 'angle of the projectile\'s axis to its flight, in the plane of incidence, [-90, 90]'),
     'obliquity': (0.0, 'deg', 'angle of the flight to the ply\'s normal (towards +x), [0, 80]'),
     'standoff': (0.05e-3, 'm', 'gap between the projectile and the top of the ply at the start'),
@@ -148,12 +153,22 @@ if not (math.isfinite(p.yaw) and woven.ballistic.YAW_RANGE[0] <= p.yaw <= woven.
     bad('yaw', '[%g, %g] deg' % woven.ballistic.YAW_RANGE)
 if not (math.isfinite(p.obliquity) and woven.ballistic.OBLIQUITY_RANGE[0] <= p.obliquity <= woven.ballistic.OBLIQUITY_RANGE[1]):
     bad('obliquity', '[%g, %g] deg' % woven.ballistic.OBLIQUITY_RANGE)
-if p.contact_model == 'paper' and p.shape in ('rcc', 'fsp'):
-    bad('shape', "'box' or 'sphere' with contact_model paper (a cylinder has the gap model's form only)")
+if p.contact_model == 'paper' and p.shape in ('rcc', 'fsp', 'mesh'):
+    bad('shape', "'box' or 'sphere' with contact_model paper (a cylinder and a mesh have the gap model's form only)")
+if p.shape == 'mesh' and not p.mesh:
+    bad('mesh', 'an STL file with shape mesh')
+if p.mesh and p.shape != 'mesh':
+    bad('mesh', "'' unless shape is mesh")
+if p.shape == 'mesh' and 'size' in p.given:
+    bad('size', 'not given for shape mesh (the mesh fixes its size)')
 # The projectile: the standard solids' dimensions and mass (woven.projectiles), or a cube / sphere.
 solid = None
 if p.shape in ('rcc', 'fsp'):
     solid = woven.projectiles.solid(p.shape, p.size if 'size' in p.given else 0.0, p.density)
+    size = 2 * solid['radius']
+    mass = p.mass if 'mass' in p.given else solid['mass']
+elif p.shape == 'mesh':  # names mesh, mesh_scale or nose_axis when the file or a value is refused
+    solid = woven.mesh.solid(p.mesh, p.mesh_scale, density=p.density, nose_axis=p.nose_axis)
     size = 2 * solid['radius']
     mass = p.mass if 'mass' in p.given else solid['mass']
 else:
@@ -224,8 +239,8 @@ if p.multirate not in (0, 1):
 if p.substeps > 1 and (p.response == 'penalty' or p.flattening == 'springs' or p.model == 'yade' or p.contact_model == 'paper'):
     bad('substeps', "1 with response penalty, flattening springs, contact_model paper or model yade (only the gap model's "
                     "impulses substep)")
-if p.model == 'yade' and (p.plies > 1 or any(ply_angles) or p.shape in ('rcc', 'fsp') or p.yaw or p.obliquity):
-    bad('model', "'woven' for packs, rcc, fsp, yaw and obliquity (model yade: one ply, a cube or a sphere, face on)")
+if p.model == 'yade' and (p.plies > 1 or any(ply_angles) or p.shape in ('rcc', 'fsp', 'mesh') or p.yaw or p.obliquity):
+    bad('model', "'woven' for packs, rcc, fsp, mesh, yaw and obliquity (model yade: one ply, a cube or a sphere, face on)")
 d = out_dir('ballistic', p)
 if p.model == 'yade':
     sys.exit(woven.yade_scenes.ballistic(p, d, [k for k in WEAVE_KEYS if k in p], CONTACT_KEYS))
@@ -495,7 +510,11 @@ measured['backing'] = {'kind': p.backing, 'standoff': p.backing_standoff if back
                        'z': float(O.bodies[backing_id].state.pos[2]) if backing_id is not None else None}
 measured['projectile'] = {'shape': p.shape, 'mass': mass, 'size': size, 'yaw': p.yaw, 'obliquity': p.obliquity,
                           'inertia': list(proj.state.inertia), 'start_reach_below': low, 'start_reach_above': high}
-if solid is not None:
+if solid is not None and p.shape == 'mesh':
+    measured['projectile'].update({'mesh': solid['file'], 'triangles': solid['count'], 'radius': solid['radius'],
+                                   'half_length': solid['half_length'], 'volume': solid['volume'],
+                                   'solid_mass': solid['mass'], 'mesh_scale': p.mesh_scale, 'nose_axis': p.nose_axis})
+elif solid is not None:
     measured['projectile'].update({k: solid[k] for k in ('radius', 'half_length', 'chisel_angle', 'land_half_width',
                                                          'density', 'volume', 'centroid_z')})
     measured['projectile']['solid_mass'] = solid['mass']

@@ -63,14 +63,32 @@ Real CollisionStage::bodyOverlap(Fabric& f, int k) {
   const RigidBody& b = bodies.at(k);
   Real worst = -INFINITY;
   BodyContact c[2];
-  for (std::size_t part = 0; part < b.parts.size(); ++part)
+  const auto measure = [&](std::size_t part, Index e) {
+    const int m = params_.model == ContactModel::Gap
+                      ? bodyGap(f, e, b, static_cast<int>(part), 0, params_.margin, params_.rule, c)
+                      : cpBodyContact(f, bounds_[e], e, b, static_cast<int>(part), 0, params_.margin, params_.rule, c[0]);
+    for (int q = 0; q < m; ++q) worst = std::max(worst, -c[q].gap);
+  };
+  if (b.parts.size() >= BodyCollider::kTreeParts) {
+    // A mesh: only the parts whose boxes meet a CP's bound (which holds its sections) are measured,
+    // through the body's bound tree (all pairs of a 2 000-triangle bullet and a ply were 2 s).
+    PartTree tree;
+    tree.build(b);
+    const Mat3 R = b.ori.toRotationMatrix();
+    std::vector<int> parts;
     for (Index e = 0; e < f.nElems(); ++e) {
       if (!f.alive[e]) continue;
-      const int m = params_.model == ContactModel::Gap
-                        ? bodyGap(f, e, b, static_cast<int>(part), 0, params_.margin, params_.rule, c)
-                        : cpBodyContact(f, bounds_[e], e, b, static_cast<int>(part), 0, params_.margin, params_.rule, c[0]);
-      for (int q = 0; q < m; ++q) worst = std::max(worst, -c[q].gap);
+      const Vec3 centre = R.transpose() * (bounds_[e].centre - b.pos);
+      const Vec3 half = R.transpose().cwiseAbs() * aabbHalf(bounds_[e]) + Vec3::Constant(params_.margin);
+      parts.clear();
+      tree.query(centre - half, centre + half, parts);
+      for (int part : parts) measure(static_cast<std::size_t>(part), e);
     }
+  } else {
+    for (std::size_t part = 0; part < b.parts.size(); ++part)
+      for (Index e = 0; e < f.nElems(); ++e)
+        if (f.alive[e]) measure(part, e);
+  }
   f.secDir = dirs;
   return worst;
 }

@@ -491,14 +491,17 @@ int cylinderGap(const Fabric& f, Index cp, const RigidBody& body, int part, Sect
   return count;
 }
 
-// Triangle form (the separating-plane form, shape/Triangle.hpp): the CP's axis segment and the
-// triangle's closest points (geom/SegmentTriangle, Eberly), s* on the axis; n the unit vector from
-// the axis point to the triangle's (the plane through the triangle's closest point normal to n
-// supports the triangle, so min over it of y.n is that point's), or, where the axis lies behind a
-// closed mesh's face (the closest point on the face from inside, or the axis through the face), n
-// = -(outward normal) and the deepest of the axis points over the face (its ends, s*) is the one
-// held. g = min over the triangle of y.n - (x(s).n + support(s, n)), n held in the part frame and s
-// held for the step: dg/dx_k = -w_k n, w = (1 - s, s), the rows of the sphere form.
+// Triangle form (the separating-plane form, shape/Triangle.hpp), the vertex-face and edge contacts
+// of a polytope manifold (Bullet's, Box2D's): each end node over the face (its projection inside
+// the triangle) is a contact along the face normal, so that a CP lying on a face is held at both
+// ends, as on a box face, not at one point it could rock on; where the axis segment comes closest
+// to an edge or a corner (geom/SegmentTriangle, Eberly), a contact at that point s* along the unit
+// vector from the axis point to the triangle's (the plane through the triangle's closest point
+// normal to it supports the triangle). A closed mesh's face (one-sided) pushes an axis behind it
+// out along its outward normal, down to a section's half-width behind (deeper is the far side of a
+// thin solid); a lone facet keeps the CP on the side it was on (held), else on its longer part's.
+// g = min over the triangle of y.n - (x(s).n + support(s, n)), n held in the part frame and s held
+// for the step: dg/dx_k = -w_k n, w = (1 - s, s), the rows of the sphere form.
 template <class Listed>
 int triangleGap(const Fabric& f, Index cp, const RigidBody& body, int part, SectionRule rule, BodyContact c,
                 BodyContact out[2], const BodyContact* held, const Listed& listed) {
@@ -506,48 +509,50 @@ int triangleGap(const Fabric& f, Index cp, const RigidBody& body, int part, Sect
   const RigidPart& q = body.parts[part];
   const Vec3 a = body.partVertex(part, 0), b = body.partVertex(part, 1), v2 = body.partVertex(part, 2);
   const Vec3 outward = (b - a).cross(v2 - a).normalized();
-  const Vec3 &x0 = f.pos[i], &x1 = f.pos[i + 1];
-  const SegmentTriangleClosest sc = closestSegmentTriangle(x0, x1, a, b, v2);
-  const Vec3 toTri = sc.onTriangle - sc.onSegment;
-  Real s = sc.s;
-  Vec3 n;
-  const bool through = !(sc.distance > kTinyDistance);
-  if (!q.twoSided && (through || (sc.feature == TriangleFeature::Face && toTri.dot(outward) > 0))) {
-    // Behind the face of a closed mesh: pushed out along the outward normal from its deepest point.
-    n = -outward;
-    Real deepest = (x0 + s * (x1 - x0) - a).dot(outward);
-    for (Real e : {0.0, 1.0}) {
-      const Vec3 x = e == 0 ? x0 : x1;
-      const Vec3 bary = detail::closestPointTriangleBary(x, a, b, v2);
-      const Real depth = (x - a).dot(outward);
-      if (detail::featureOf(bary) == TriangleFeature::Face && depth < deepest) deepest = depth, s = e;
-    }
-  } else if (through) {
-    // A lone facet through the axis: the side the pair was on (held), else the side of the end that
-    // lies farther from the plane, which the shorter end is pushed back to.
-    const Real h0 = (x0 - a).dot(outward), h1 = (x1 - a).dot(outward);
-    const Real side = held ? -(body.partAxes(part) * held->localNormal).dot(outward)
-                           : (std::abs(h0) >= std::abs(h1) ? h0 : h1);
-    n = side >= 0 ? Vec3(-outward) : outward;
-    s = (side >= 0) == (h0 >= 0) ? 1.0 : 0.0;  // the end on the wrong side
-  } else {
-    n = toTri / sc.distance;
+  const Mat3 axes = body.partAxes(part);
+  const Vec3 x[2] = {f.pos[i], f.pos[i + 1]};
+  const Real height[2] = {(x[0] - a).dot(outward), (x[1] - a).dot(outward)};
+  // The side the CP is on: above the face (+1: pushed along the outward normal) or below.
+  Real side = 1;
+  if (q.twoSided)
+    side = held ? -(axes * held->localNormal).dot(outward) : (std::abs(height[0]) >= std::abs(height[1]) ? height[0] : height[1]);
+  const Vec3 faceNormal = side >= 0 ? Vec3(-outward) : outward;  // from the CP towards the triangle
+  int count = 0;
+  const auto emit = [&](Real s, const Vec3& n) {
+    if (count == 2) return;
+    const Vec3 local = axes.transpose() * n;
+    const SectionAt sec = sectionAt(f, cp, s, rule);
+    const Real room = triangleMinAlong(a, b, v2, n) - sec.centre.dot(n);
+    const Real full = ellipseSupport(sec.u, sec.d, sec.a, sec.b, n);
+    // The measure memory (capMeasure's rule): the section may reach into room the triangle leaves,
+    // beyond its support at the last step along the same normal (new: its half-thickness).
+    const bool sameFace = held && held->localNormal.dot(local) > 0.999;
+    const Real support = std::min(full, std::max(sameFace ? held->support[0] : sec.b, room));
+    c.s = s, c.normal = n, c.localNormal = local;
+    c.support[0] = support, c.support[1] = 0, c.held = full - support;
+    c.gap = room - support;
+    c.point = sec.centre + support * n;
+    if (listed(c)) out[count++] = c;
+  };
+  bool onFace[2];
+  for (int k = 0; k < 2; ++k) {
+    onFace[k] = detail::featureOf(detail::closestPointTriangleBary(x[k], a, b, v2)) == TriangleFeature::Face;
+    const Real below = -side * height[k];  // how far the node lies on the far side of the face [m]
+    if (onFace[k] && below > semiAxes(f.secRadius[i + k], f.secFlat[i + k], rule).a) onFace[k] = false;  // the far side
   }
-  const Vec3 local = body.partAxes(part).transpose() * n;
-  const SectionAt sec = sectionAt(f, cp, s, rule);
-  const Real room = triangleMinAlong(a, b, v2, n) - sec.centre.dot(n);
-  const Real full = ellipseSupport(sec.u, sec.d, sec.a, sec.b, n);
-  // The measure memory (capMeasure's rule): the section may reach into room the triangle leaves,
-  // beyond its support at the last step along the same normal (new: its half-thickness).
-  const bool sameFace = held && held->localNormal.dot(local) > 0.999;
-  const Real support = std::min(full, std::max(sameFace ? held->support[0] : sec.b, room));
-  c.s = s, c.normal = n, c.localNormal = local;
-  c.support[0] = support, c.support[1] = 0, c.held = full - support;
-  c.gap = room - support;
-  c.point = sec.centre + support * n;
-  if (!listed(c)) return 0;
-  out[0] = c;
-  return 1;
+  for (int k = 0; k < 2; ++k)
+    if (onFace[k]) emit(k, faceNormal);
+  if (onFace[0] && onFace[1]) return count;  // the whole axis over the face: its ends are the closest
+  const SegmentTriangleClosest sc = closestSegmentTriangle(x[0], x[1], a, b, v2);
+  if (sc.feature == TriangleFeature::Face && sc.distance > kTinyDistance) return count;  // at an end over the face
+  if (!(sc.distance > kTinyDistance)) {
+    // The axis through the triangle away from its ends over the face: pushed back along the face
+    // normal from the crossing.
+    if (!onFace[0] && !onFace[1]) emit(sc.s, faceNormal);
+    return count;
+  }
+  emit(sc.s, (sc.onTriangle - sc.onSegment) / sc.distance);
+  return count;
 }
 
 }  // namespace
@@ -610,7 +615,21 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
   }
   if (body.parts[part].type == RigidPart::Type::Cylinder)
     return cylinderGap(f, cp, body, part, rule, c, out, tangent, held, listed);
-  if (body.parts[part].type == RigidPart::Type::Triangle) return triangleGap(f, cp, body, part, rule, c, out, held, listed);
+  if (body.parts[part].type == RigidPart::Type::Triangle) {
+    // A mesh lists each CP with the many small triangles near it: those whose bounding ball lies
+    // farther from the axis than the sections reach and the step closes are culled first (a point
+    // to segment distance instead of the closest points' Voronoi tests).
+    const Vec3 centre = (body.partVertex(part, 0) + body.partVertex(part, 1) + body.partVertex(part, 2)) / 3;
+    Real ball = 0;
+    for (int k = 0; k < 3; ++k) ball = std::max(ball, (body.partVertex(part, k) - centre).norm());
+    const Vec3 axis = f.pos[i + 1] - f.pos[i];
+    const Real s = std::clamp((centre - f.pos[i]).dot(axis) / axis.squaredNorm(), Real(0), Real(1));
+    const Real apart = (centre - f.pos[i] - s * axis).norm() - ball -
+                       std::max(semiAxes(f.secRadius[i], f.secFlat[i], rule).a, semiAxes(f.secRadius[i + 1], f.secFlat[i + 1], rule).a);
+    const Real bodySpeed = body.vel.norm() + body.angVel.norm() * ((centre - body.pos).norm() + ball);
+    if (apart > margin + (bodySpeed + nodeSpeed) * dt) return 0;
+    return triangleGap(f, cp, body, part, rule, c, out, held, listed);
+  }
   // The face of the box that leaves the CP the most room (the separating-axis choice among the
   // box's faces), then one contact per end section: a level CP under a face is held at both ends.
   const OBB box = body.partBox(part);

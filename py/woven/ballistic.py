@@ -9,7 +9,7 @@ import math
 import numpy as np
 import yade.wrapper
 from yade import utils
-from yade._minieigenHP import Quaternion, Vector3
+from yade._minieigenHP import Matrix3, Quaternion, Vector3
 
 from . import arrays, coupling, pack
 from ._woven import MAX_WEAVE_NODES
@@ -114,7 +114,7 @@ def fine_radius_from_waves(weave_args, V, t_end, shape, size):
     return U * t_end + (size / 2 ** 0.5 if shape == 'box' else 0.5 * size)  # rcc, fsp: size = diameter
 
 
-SHAPES = ('box', 'sphere', 'rcc', 'fsp')
+SHAPES = ('box', 'sphere', 'rcc', 'fsp', 'mesh')
 YAW_RANGE = (-90.0, 90.0)  # [deg]
 OBLIQUITY_RANGE = (0.0, 80.0)  # [deg]
 
@@ -127,7 +127,7 @@ def projectile_pose(shape, yaw=0.0, obliquity=0.0):
     o = math.radians(obliquity)
     direction = Vector3(math.sin(o), 0, -math.cos(o))
     ori = Ry(obliquity + yaw)
-    if shape in ('rcc', 'fsp'):  # the part's nose is +z: turned to face -z first
+    if shape in ('rcc', 'fsp', 'mesh'):  # the part's (the mesh's nose frame's) nose is +z: turned to face -z first
         ori = ori * Quaternion(Vector3(1, 0, 0), math.pi)
     return ori, direction
 
@@ -142,6 +142,9 @@ def projectile_extent(shape, size, ori, solid=None):
         R = ori.toRotationMatrix()
         h = 0.5 * size * sum(abs(R[2, k]) for k in range(3))
         return h, h
+    if shape == 'mesh':  # the corners of the triangles (principal frame) turned by ori
+        z = [(ori * Vector3(*c))[2] for c in solid['triangles'].reshape(-1, 3)]
+        return -min(z), max(z)
     from ._woven import cylinder_min_along
     dims = (solid['radius'], solid['half_length'], solid['chisel_angle'], solid['land_half_width'])
     off = ori * Vector3(0, 0, -solid['centroid_z'])  # the part's centre from the centre of mass
@@ -158,7 +161,8 @@ def add_projectile(ply, shape='box', mass=1.1e-3, size=5.59e-3, V=200.0, standof
     moving at V [m/s] along -z turned by `obliquity` [deg] towards +x, its axis `yaw` [deg] off its
     flight in that plane (projectile_pose): a cube of edge `size` [m], a sphere of diameter `size`, of
     `mass` [kg], or (shape 'rcc' or 'fsp') the exact cylinder `solid` (woven.projectiles.solid; its
-    mass and inertia scaled to `mass`), shown in YADE by a box stand-in around it. Appended to
+    mass and inertia scaled to `mass`), or (shape 'mesh') the triangle mesh `solid` (woven.mesh.solid,
+    nose first, its mass and inertia scaled to `mass`), shown in YADE by a box stand-in around it. Appended to
     O.bodies and coupled to the ply's engine (which refuses a projectile that starts inside the
     ply). Returns the YADE body."""
     if shape not in SHAPES:
@@ -179,6 +183,9 @@ def add_projectile(ply, shape='box', mass=1.1e-3, size=5.59e-3, V=200.0, standof
         inertia, velocity, ori, parts = Vector3(inertia, inertia, inertia), Vector3(0, 0, -V), None, None
     else:
         ori, direction = projectile_pose(shape, yaw, obliquity)
+        if shape == 'mesh':  # the body frame is the mesh's principal frame within its nose frame
+            P = solid['frame']
+            ori = ori * Quaternion(Matrix3(*[float(P[i, j]) for i in range(3) for j in range(3)]))
         low, _ = projectile_extent(shape, size, ori, solid)
         # On the line of flight through the ply's centre at the height where the lowest point is
         # `standoff` above the top.
@@ -190,6 +197,13 @@ def add_projectile(ply, shape='box', mass=1.1e-3, size=5.59e-3, V=200.0, standof
         elif shape == 'sphere':
             body = utils.sphere(start, half, fixed=False)
             inertia = Vector3.Ones * (0.4 * mass * half ** 2)
+        elif shape == 'mesh':
+            tri = solid['triangles']
+            half = np.abs(tri.reshape(-1, 3)).max(axis=0)
+            body = utils.box(start, tuple(float(h) for h in half), fixed=False)
+            inertia = Vector3(*solid['inertia']) * (mass / solid['mass'])
+            parts = [('triangle', tuple(Vector3(*map(float, c)) for c in t), Vector3.Zero, Quaternion.Identity)
+                     for t in tri]
         else:
             scale = mass / solid['mass']
             body = utils.box(start, (solid['radius'], solid['radius'], solid['half_length']), fixed=False)

@@ -1,4 +1,4 @@
-"""YADE bodies that collide with the fabric: a projectile, clamps, any Box, Sphere, Wall or clump of these.
+"""YADE bodies that collide with the fabric: a projectile, clamps, any Box, Sphere, Wall, Facet or clump of these.
 
     pid = O.bodies.append(utils.box(centre, half_extents))
     woven.coupling.couple(engine, [pid])     # before woven.attach(engine)
@@ -19,7 +19,8 @@ WALL_DEPTH = 10.0  # [m] half-size of the box that stands for a YADE Wall (see _
 
 
 def _parts_of(body):
-    """[('box', half_extents, offset, ori) | ('sphere', radius, offset, ori)] in the body's frame."""
+    """[('box', half_extents, offset, ori) | ('sphere', radius, offset, ori) | ('facet', corners, offset, ori)
+    | ('triangle', corners, offset, ori)] in the body's frame."""
     shape = body.shape
     kind = type(shape).__name__
     I = Quaternion.Identity
@@ -44,13 +45,46 @@ def _parts_of(body):
         n[shape.axis] = 1.0
         half = Vector3(WALL_DEPTH, WALL_DEPTH, WALL_DEPTH)
         return [('box', half, inv * (-shape.sense * WALL_DEPTH * n), inv)]
+    if kind == 'Facet':
+        # A lone facet: outside on both faces (its corners in the body frame, as YADE keeps them).
+        return [('facet', tuple(Vector3(v) for v in shape.vertices), zero, I)]
     if kind == 'Clump':
         parts = []
         for mid, (rel_pos, rel_ori) in sorted(shape.members.items()):
             sub = _parts_of(_O.bodies[mid])
             parts += [(k, size, rel_pos + rel_ori * off, rel_ori * ori) for (k, size, off, ori) in sub]
+        return _closed_faces(parts)
+    raise ValueError('body %d has shape %s: woven collides yarns with Box, Sphere, Wall, Facet and clumps of these'
+                     % (body.id, kind))
+
+
+def _closed_faces(parts):
+    """A clump's facets that close a solid (yade.ymport.stl of a closed mesh) become the faces of that
+    solid: one-sided, outward (the corners reversed where the mesh winds inward), so a yarn pressed
+    into it is pushed out, not through. Facets that close nothing stay two-sided."""
+    facets = [k for k, p in enumerate(parts) if p[0] == 'facet']
+    if len(facets) < 4:
         return parts
-    raise ValueError('body %d has shape %s: woven collides yarns with Box, Sphere, Wall and clumps of these' % (body.id, kind))
+    import numpy as np
+    from . import mesh
+    # The corners in the clump frame, welded where they coincide to 1e-12 m (YADE stores each
+    # facet's corners on their own).
+    corners = np.array([[tuple(parts[k][2] + parts[k][3] * v) for v in parts[k][1]] for k in facets])
+    keys = np.round(corners.reshape(-1, 3) / 1e-12).astype(np.int64)
+    _, inverse = np.unique(keys, axis=0, return_inverse=True)
+    tris = inverse.reshape(-1, 3)
+    try:
+        mesh.check_closed(tris)
+    except ValueError:
+        return parts
+    verts = np.zeros((tris.max() + 1, 3))
+    verts[tris.reshape(-1)] = corners.reshape(-1, 3)
+    flip = mesh.volume(verts, tris) < 0
+    out = list(parts)
+    for k in facets:
+        kind, v, off, ori = parts[k]
+        out[k] = ('triangle', (v[0], v[2], v[1]) if flip else v, off, ori)
+    return out
 
 
 def couple(engine, ids, parts=None):
@@ -61,7 +95,7 @@ def couple(engine, ids, parts=None):
 
     A body that YADE does not integrate (b.dynamic False) is kinematic for the fabric: impulses do
     not change its motion. Returns the woven body indices. Raises ValueError for an unknown id, a
-    shape other than Box/Sphere/Clump, non-positive mass of a dynamic body, non-finite velocity,
+    shape other than Box/Sphere/Wall/Facet/Clump, non-positive mass of a dynamic body, non-finite velocity,
     or a body that starts inside the fabric.
     """
     if not engine.collisions_enabled:

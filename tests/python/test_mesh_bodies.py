@@ -161,3 +161,133 @@ def test_ballistic_backing_wall(tmp_path):
                      ('backing_standoff=1', 'backing_standoff')):
         rc, out, _ = run_scene('ballistic.py', tmp_path, arg, 'side=0.004', 't_end=1e-7', timeout=120)
         assert rc != 0 and ('%s = ' % key) in out and 'is invalid: allowed' in out, out
+
+
+def _facets_of(v, t):
+    """YADE Facet bodies of the triangles t of vertices v (each a body of its own)."""
+    from yade import utils
+    return [utils.facet([tuple(map(float, v[i])) for i in tri], fixed=True) for tri in t]
+
+
+def test_facet_sheet_stops_the_fabric(yade_ns):
+    """Two YADE Facets (a lone sheet: outside on both faces) under a ply, moving up at 20 m/s as
+    kinematic bodies, lift the ply without letting it through, as the Wall does."""
+    import woven
+    from yade import Vector3
+    O = yade_ns.O
+    O.reset()
+    O.engines = []
+    w = woven.weave(preset='km2_706', nx=3, ny=3, cp_per_span=2)
+    e = w.engine
+    woven.contact.enable(e, position_correction=0)
+    e.settle_sections()
+    X = woven.positions(e)
+    z0 = X[:, 2].min() - 0.2e-3
+    lo, hi = X.min(axis=0) - 1e-3, X.max(axis=0) + 1e-3
+    v = np.array([[lo[0], lo[1], z0], [hi[0], lo[1], z0], [hi[0], hi[1], z0], [lo[0], hi[1], z0]])
+    ids = [O.bodies.append(b) for b in _facets_of(v, [(0, 1, 2), (0, 2, 3)])]
+    for i in ids:
+        O.bodies[i].state.vel = Vector3(0, 0, 20.0)
+    woven.coupling.couple(e, ids)
+    assert [e._body_parts(k)[0][0] for k in range(e.n_bodies)] == ['facet', 'facet']
+    O.engines = [yade_ns.wrapper.ForceResetter(), yade_ns.wrapper.NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
+    woven.attach(e)
+    O.run(400, True)
+    assert O.bodies[ids[0]].state.pos[2] > z0 + 1e-4  # the sheet moved up into where the ply was
+    kin = np.array([e.is_kinematic(i) for i in range(e.n_nodes)])
+    assert woven.velocities(e)[~kin, 2].mean() > 1.0  # the ply was pushed up
+    assert e.collision_stats()['max_body_penetration'] < 0.05e-3
+
+
+def test_clump_of_facets_is_a_closed_solid(yade_ns):
+    """A clump of the 12 facets of a cube (as yade.ymport.stl makes of a closed mesh) is coupled as the
+    one-sided, outward faces of a solid, also when the file winds inward (the corners reversed);
+    11 of them close nothing and stay two-sided facets."""
+    import woven
+    O = yade_ns.O
+    v, t = cube(4e-3, (0, 0, 0))
+
+    def parts_of(tris):
+        O.reset()
+        O.engines = []
+        w = woven.weave(preset='km2_706', nx=1, ny=1, cp_per_span=1)
+        woven.contact.enable(w.engine, position_correction=0)
+        facets = _facets_of(v + np.array([0, 0, 5e-3]), tris)
+        for b in facets:  # YADE's clump asserts a positive mass of its members: a share of a 1 g solid
+            b.state.mass, b.state.inertia = 1e-3 / len(facets), (1e-12, 1e-12, 1e-12)
+        cid = O.bodies.appendClumped(facets)[0]
+        O.bodies[cid].dynamic = False
+        woven.coupling.couple(w.engine, [cid])
+        return w.engine._body_parts(0)
+
+    for tris in (t, t[:, ::-1]):
+        parts = parts_of(tris)
+        assert len(parts) == 12 and {p[0] for p in parts} == {'triangle'}
+        for kind, corners, centre, axes in parts:  # outward: the normal points away from the cube's centre
+            a, b, c = (np.array(list(x)) for x in corners)
+            n = np.cross(b - a, c - a)
+            assert np.dot(n, (a + b + c) / 3 - np.array([0, 0, 5e-3])) > 0
+    assert {p[0] for p in parts_of(t[:11])} == {'facet'}
+
+
+def test_cube_mesh_strikes_as_the_box(tmp_path):
+    """shape=mesh with the STL of a cube gives the box's impact: the same residual velocity within 1 %
+    and energy books within 1 % (the triangle form against the box form, two independent gap
+    functions of the same solid)."""
+    from conftest import run_scene
+    a = 5.59e-3
+    v, t = cube(a, (0, 0, 0))
+    path = str(tmp_path / 'cube.stl')
+    mesh.write_stl(path, v, t)
+    (tmp_path / 'box').mkdir(), (tmp_path / 'mesh').mkdir()
+    common = ('side=0.0127', 'V=600', 'pictures=0', 'progress=0', 'vtk_every=-1', 'mass=1.1e-3')
+    rc, out, box = run_scene('ballistic.py', tmp_path / 'box', 'shape=box', *common, timeout=300)
+    assert rc == 0, out
+    rc, out, tri = run_scene('ballistic.py', tmp_path / 'mesh', 'shape=mesh', 'mesh=' + path, *common, timeout=300)
+    assert rc == 0, out
+    mb, mt = box['measured'], tri['measured']
+    assert mt['projectile']['triangles'] == 12
+    assert mb['outcome'] == mt['outcome'] == 'perforated'
+    assert mt['residual_velocity'] == pytest.approx(mb['residual_velocity'], rel=0.01)
+    assert abs(mt['energy_balance_error']) < 0.01
+    assert mt['max_body_penetration'] < 0.1 * mt['yarn_thickness']
+
+
+def test_mesh_projectile_keys(tmp_path):
+    """shape=mesh refuses, naming the key: no file, a file with another shape, size given, a bad
+    nose_axis or mesh_scale, an open mesh (naming the file), contact_model paper."""
+    from conftest import run_scene
+    v, t = cube(5e-3, (0, 0, 0))
+    good, open_ = str(tmp_path / 'cube.stl'), str(tmp_path / 'open.stl')
+    mesh.write_stl(good, v, t)
+    mesh.write_stl(open_, v, t[:-1])
+    for args, key in ((('shape=mesh',), "mesh = ''"), (('shape=box', 'mesh=' + good), 'mesh = '),
+                      (('shape=mesh', 'mesh=' + good, 'size=0.01'), 'size = '),
+                      (('shape=mesh', 'mesh=' + good, 'nose_axis=+w'), 'nose_axis = '),
+                      (('shape=mesh', 'mesh=' + good, 'mesh_scale=0'), 'mesh_scale = '),
+                      (('shape=mesh', 'mesh=' + open_), 'open.stl'),
+                      (('shape=mesh', 'mesh=' + good, 'contact_model=paper'), 'shape = ')):
+        rc, out, _ = run_scene('ballistic.py', tmp_path, *args, 'side=0.004', 't_end=1e-7', timeout=120)
+        assert rc != 0 and key in out and 'is invalid' in out, (args, out[-800:])
+
+
+def test_mesh_solid_frames():
+    """woven.mesh.solid: a box 2 x 4 x 8 mm along x read with nose_axis=+x is 8 mm long along the
+    flight (half_length 4 mm) and 2-4 mm across (radius the corner's distance from the axis), its
+    principal moments the box's in closed form; the triangles are in the principal frame (centred)."""
+    import tempfile, os
+    a = np.array([8e-3, 2e-3, 4e-3])
+    v, t = cube(1.0, (0, 0, 0))
+    v = v * a
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, 'box.stl')
+        mesh.write_stl(path, v * 1e3, t)  # in mm
+        s = mesh.solid(path, scale=1e-3, mass=1e-3, nose_axis='+x')
+    assert s['half_length'] == pytest.approx(4e-3, rel=1e-6)
+    assert s['radius'] == pytest.approx(math.hypot(1e-3, 2e-3), rel=1e-6)
+    m = 1e-3
+    expect = sorted([m * (a[1] ** 2 + a[2] ** 2) / 12, m * (a[0] ** 2 + a[2] ** 2) / 12, m * (a[0] ** 2 + a[1] ** 2) / 12])
+    assert np.allclose(sorted(s['inertia']), expect, rtol=1e-5)
+    assert np.allclose(s['triangles'].reshape(-1, 3).mean(axis=0), 0, atol=1e-9)
+    with pytest.raises(ValueError, match='nose_axis'):
+        mesh.solid(path, nose_axis='x')
