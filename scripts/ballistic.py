@@ -74,7 +74,8 @@ defaults.update({
     'broad_phase': ('grid', '', CONTACT_KEYS['broad_phase'][2]),
     'side': (0.0508, 'm', 'side of the square ply (yarns = side / spacing, rounded to whole pattern repeats)'),
     'clamp': (4, '', 'edges held: 4 (every yarn end), 2 (warp ends only), 0 (free); every ply alike'),
-    'backing': ('none', '', "'none' or 'wall': a fixed YADE Wall (a rigid plane) backing_standoff below the pack"),
+    'backing': ('none', '', "'none', 'wall' (a fixed YADE Wall: a rigid plane) or 'facet' (a fixed plate of two YADE "
+                "Facets, 1.5 side across) backing_standoff below the pack"),
     'backing_standoff': (5e-3, 'm', 'gap between the lowest yarn section and the backing wall, (0, 0.1] m'),
     'plies': (1, '', 'plies in the pack, [1, 40] (woven.pack: copies of the ply stacked below the first)'),
     'ply_gap': (-1.0, 'm', 'clear gap between neighbouring plies, [0, 0.01] m; -1: one yarn thickness'),
@@ -167,10 +168,9 @@ if p.shape in ('rcc', 'fsp'):
     solid = woven.projectiles.solid(p.shape, p.size if 'size' in p.given else 0.0, p.density)
     size = 2 * solid['radius']
     mass = p.mass if 'mass' in p.given else solid['mass']
-elif p.shape == 'mesh':  # names mesh, mesh_scale or nose_axis when the file or a value is refused
-    solid = woven.mesh.solid(p.mesh, p.mesh_scale, density=p.density, nose_axis=p.nose_axis)
-    size = 2 * solid['radius']
-    mass = p.mass if 'mass' in p.given else solid['mass']
+elif p.shape == 'mesh':  # the file is read once the keys have passed (below)
+    woven.mesh.check_keys(p.mesh_scale, p.nose_axis)
+    size, mass = p.size, p.mass
 else:
     size, mass = p.size, p.mass
 if not (math.isfinite(p.side) and 1e-3 <= p.side <= 1):
@@ -182,8 +182,8 @@ if not 1 <= p.plies <= woven.pack.MAX_PLIES:
 if not (math.isfinite(p.ply_gap) and (0 <= p.ply_gap <= 0.01 or p.ply_gap == -1)):
     bad('ply_gap', '[0, 0.01] m, or -1 (one yarn thickness)')
 ply_angles = woven.pack.parse_angles(p.ply_angles, p.plies)  # names ply_angles and its range
-if p.backing not in ('none', 'wall'):
-    bad('backing', "'none' or 'wall'")
+if p.backing not in ('none', 'wall', 'facet'):
+    bad('backing', "'none', 'wall' or 'facet'")
 if not (math.isfinite(p.backing_standoff) and 0 < p.backing_standoff <= 0.1):
     bad('backing_standoff', '(0, 0.1] m')
 if p.backing != 'none' and p.model == 'yade':
@@ -242,6 +242,10 @@ if p.substeps > 1 and (p.response == 'penalty' or p.flattening == 'springs' or p
 if p.model == 'yade' and (p.plies > 1 or any(ply_angles) or p.shape in ('rcc', 'fsp', 'mesh') or p.yaw or p.obliquity):
     bad('model', "'woven' for packs, rcc, fsp, mesh, yaw and obliquity (model yade: one ply, a cube or a sphere, face on)")
 d = out_dir('ballistic', p)
+if p.shape == 'mesh':  # names the file when it is unreadable, open, non-manifold or wound inward
+    solid = woven.mesh.solid(p.mesh, p.mesh_scale, density=p.density, nose_axis=p.nose_axis)
+    size = 2 * solid['radius']
+    mass = p.mass if 'mass' in p.given else solid['mass']
 if p.model == 'yade':
     sys.exit(woven.yade_scenes.ballistic(p, d, [k for k in WEAVE_KEYS if k in p], CONTACT_KEYS))
 
@@ -274,6 +278,19 @@ if p.backing == 'wall':
     backing_id = O.bodies.append(utils.wall((ply.centre[0], ply.centre[1], z_wall), axis=2, sense=1))
     O.bodies[backing_id].dynamic = False
     woven.coupling.couple(eng, [backing_id])
+elif p.backing == 'facet':
+    # A rigid plate of two YADE Facets (lone facets: outside on both faces), 1.5 sides across, centred
+    # under the ply: what a mesh backing (yade.ymport.stl of a plate) gives the fabric.
+    z_wall = float(X0[:, 2].min()) - thickness - p.backing_standoff
+    h = 0.75 * p.side
+    cx, cy = ply.centre[0], ply.centre[1]
+    c = [(cx - h, cy - h, z_wall), (cx + h, cy - h, z_wall), (cx + h, cy + h, z_wall), (cx - h, cy + h, z_wall)]
+    plate = [O.bodies.append(utils.facet([c[0], c[1], c[2]], fixed=True)),
+             O.bodies.append(utils.facet([c[0], c[2], c[3]], fixed=True))]
+    for i in plate:
+        O.bodies[i].dynamic = False
+    woven.coupling.couple(eng, plate)
+    backing_id = plate[0]
 # How far it reaches below and above its centre of mass at the start (the nose, and the rear that
 # must pass the last ply): half the cube's edge or the sphere's radius in the scene as it was.
 low, high = woven.ballistic.projectile_extent(p.shape, size, proj.state.ori, solid)

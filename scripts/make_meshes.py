@@ -12,7 +12,7 @@ import os
 import numpy as np
 
 from woven import mesh, projectiles
-from woven.output import write_text_atomic
+from woven.output import dry_run_stop, write_text_atomic
 from woven.params import read_params
 
 BULLET = {'diameter': 9.02e-3, 'length': 15.6e-3, 'nose_length': 7.0e-3, 'mass': 8.0e-3}  # [m], [kg]
@@ -24,6 +24,7 @@ if not 8 <= p.segments <= 1024:
     raise ValueError('segments = %r is invalid: allowed [8, 1024]' % p.segments)
 if not 2 <= p.nose_rings <= 1000:
     raise ValueError('nose_rings = %r is invalid: allowed [2, 1000]' % p.nose_rings)
+dry_run_stop('make_meshes')
 os.makedirs(p.out, exist_ok=True)
 
 R, L, Ln = BULLET['diameter'] / 2, BULLET['length'], BULLET['nose_length']

@@ -164,6 +164,13 @@ def _nose_turn(nose_axis):
     return np.eye(3) + K + K @ K  # Rodrigues at a quarter turn (sin 1, 1 - cos 1)
 
 
+def check_keys(scale, nose_axis):
+    """Refuses a bad mesh_scale or nose_axis, naming the key (before any file is read)."""
+    _nose_turn(nose_axis)
+    if not (np.isfinite(scale) and 0 < scale <= 1e3):
+        raise ValueError('mesh_scale = %r is invalid: allowed (0, 1e3] (1e-3 for a file in mm)' % (scale,))
+
+
 def solid(path, scale=1.0, density=None, mass=None, nose_axis='+z'):
     """A mesh projectile from an STL file: the closed solid's triangles in its principal frame (origin
     at the centre of mass), its mass, principal inertia and frame.
@@ -175,9 +182,8 @@ def solid(path, scale=1.0, density=None, mass=None, nose_axis='+z'):
     radius (largest distance from the nose axis through the centre of mass) and half_length (half
     the extent along it) [m], file. Refuses an unreadable, open, non-manifold or inward mesh naming
     the file."""
-    N = _nose_turn(nose_axis)  # refuses a bad nose_axis before the file is read
-    if not (np.isfinite(scale) and 0 < scale <= 1e3):
-        raise ValueError('mesh_scale = %r is invalid: allowed (0, 1e3] (1e-3 for a file in mm)' % (scale,))
+    check_keys(scale, nose_axis)
+    N = _nose_turn(nose_axis)
     try:
         v, t = read_stl(path, scale)
     except OSError as e:
