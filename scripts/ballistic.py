@@ -291,6 +291,7 @@ elif p.backing == 'facet':
         O.bodies[i].dynamic = False
     woven.coupling.couple(eng, plate)
     backing_id = plate[0]
+places0 = {}  # the crossings' places after the first step (they are made in it), for their slip (load_sharing)
 # How far it reaches below and above its centre of mass at the start (the nose, and the rear that
 # must pass the last ply): half the cube's edge or the sphere's radius in the scene as it was.
 low, high = woven.ballistic.projectile_extent(p.shape, size, proj.state.ori, solid)
@@ -382,6 +383,8 @@ if pk is not None:
 def watch():
     """Every step: deepest nose position, overlaps, perforation / arrest, progress line, mirror."""
     state['step_end'] = time.time()  # the loop's wall time ends at the last step (see below)
+    if O.iter == 1:
+        places0.update(woven.ballistic.crossing_places(eng))
     meter.sample()
     s = eng.collision_stats()
     state['min_nose'] = min(state['min_nose'], nose_z())
@@ -523,6 +526,9 @@ measured = {
     'energy_guard': guard.summary(),
 }
 measured['max_iterations'] = contact_args['max_iterations']
+# Which yarns hold the energy at the end (principal against secondary, by family), how many carry
+# load, how far the crossings slipped (docs/ballistic.md, "Friction"; SI).
+measured['load_sharing'] = woven.ballistic.load_sharing(eng, X0, ply.centre, 0.5 * size, places0)
 measured['backing'] = {'kind': p.backing, 'standoff': p.backing_standoff if backing_id is not None else None,
                        'z': float(O.bodies[backing_id].state.pos[2]) if backing_id is not None else None}
 measured['projectile'] = {'shape': p.shape, 'mass': mass, 'size': size, 'yaw': p.yaw, 'obliquity': p.obliquity,

@@ -224,3 +224,78 @@ def add_projectile(ply, shape='box', mass=1.1e-3, size=5.59e-3, V=200.0, standof
     b.state.vel = velocity
     coupling.couple(ply.engine, [pid], parts={pid: parts} if parts else None)  # refuses a start inside the ply
     return b
+
+
+def crossing_places(engine):
+    """The persistent crossings' places, {(yarn A, yarn B): (arc A, arc B)}: each sliding coordinate
+    as rest length along its yarn from the yarn's first node [m] (a material coordinate: it moves only
+    when the yarns slip over each other)."""
+    c = arrays.crossings(engine)
+    if len(c) == 0:
+        return {}
+    l0 = arrays.rest_lengths(engine)
+    starts, first = [], []
+    for y in range(engine.n_yarns):
+        info = engine.yarn(y)
+        first.append(info['first_element'])
+        starts.append(np.concatenate([[0.0], np.cumsum(l0[info['first_element']:info['first_element'] + info['n_elements']])]))
+    first = np.array(first)
+    out = {}
+    for cpA, sA, cpB, sB in c[:, :4]:
+        ya, yb = int(np.searchsorted(first, cpA, side='right') - 1), int(np.searchsorted(first, cpB, side='right') - 1)
+        ka, kb = int(cpA) - first[ya], int(cpB) - first[yb]
+        out[(ya, yb)] = (starts[ya][ka] + sA * l0[int(cpA)], starts[yb][kb] + sB * l0[int(cpB)])
+    return out
+
+
+def load_sharing(engine, X0, centre, half_size, places0=None):
+    """Where the fabric holds the energy it took, and how its yarns slipped: the yarns' kinetic and
+    elastic energy and the energy their breaks released [J], by family (along x or y at the start)
+    and by the yarn's distance from the impact point at the start in projectile half-sizes
+    (`half_size` [m]): principal (under the projectile, <= 1), 1-2, 2-4, > 4; the yarns that hold
+    at least 1 % of the largest yarn's energy; and, given the crossings' places at the start
+    (crossing_places), the mean and largest slip of the crossings under the projectile and outside
+    it [m]. SI units."""
+    X, V, M = arrays.positions(engine), arrays.velocities(engine), arrays.masses(engine)
+    l0, alive = arrays.rest_lengths(engine), arrays.alive(engine)
+    kin = 0.5 * M * np.sum(V * V, axis=1)
+    released = np.zeros(engine.n_yarns)
+    for b in engine.break_log():
+        released[b['yarn']] += b['energy']
+    bins = ('principal', '1-2', '2-4', '>4')
+    table = {fam: {b: 0.0 for b in bins} for fam in ('x', 'y')}
+    count = {fam: {b: 0 for b in bins} for fam in ('x', 'y')}
+    energy, where = np.zeros(engine.n_yarns), []
+    for y in range(engine.n_yarns):
+        info = engine.yarn(y)
+        i0, n = info['first_node'], info['n_nodes']
+        j0, m = info['first_element'], info['n_elements']
+        P0, P = X0[i0:i0 + n], X[i0:i0 + n]
+        stretch = np.linalg.norm(P[1:] - P[:-1], axis=1) - l0[j0:j0 + m]
+        if info['tension_only']:
+            stretch = np.maximum(stretch, 0.0)
+        el = np.sum(np.where(alive[j0:j0 + m] != 0, 0.5 * info['E'] * info['area'] / l0[j0:j0 + m] * stretch ** 2, 0.0))
+        energy[y] = np.sum(kin[i0:i0 + n]) + el + released[y]
+        span = P0[-1] - P0[0]
+        fam = 'x' if abs(span[0]) >= abs(span[1]) else 'y'
+        off = abs(np.mean(P0[:, 1 if fam == 'x' else 0]) - centre[1 if fam == 'x' else 0]) / half_size
+        b = bins[0] if off <= 1 else bins[1] if off <= 2 else bins[2] if off <= 4 else bins[3]
+        table[fam][b] += float(energy[y])
+        count[fam][b] += 1
+        where.append(b)
+    loaded = energy >= 0.01 * energy.max() if len(energy) and energy.max() > 0 else np.zeros(len(energy), bool)
+    out = {'energy': table, 'yarns': count,
+           'loaded_yarns': {b: int(sum(1 for y in range(len(where)) if loaded[y] and where[y] == b)) for b in bins},
+           'total': float(np.sum(energy))}
+    if places0:
+        now = crossing_places(engine)
+        slip = {'principal': [], 'outside': []}
+        for (ya, yb), (a0, b0) in places0.items():
+            if (ya, yb) not in now:
+                continue  # a yarn broke there
+            a1, b1 = now[(ya, yb)]
+            under = where[ya] == 'principal' and where[yb] == 'principal'
+            slip['principal' if under else 'outside'].append(max(abs(a1 - a0), abs(b1 - b0)))
+        out['crossing_slip'] = {k: {'mean': float(np.mean(v)) if v else None, 'max': float(np.max(v)) if v else None,
+                                    'crossings': len(v)} for k, v in slip.items()}
+    return out
