@@ -122,7 +122,7 @@ bp::dict yarnInfo(FabricEngine& e, Index y) {
   d["family"] = Y.family == YarnFamily::Warp ? "warp" : (Y.family == YarnFamily::Weft ? "weft" : "free");
   d["width"] = Y.section.width, d["thickness"] = Y.section.thickness;
   d["E"] = M.E, d["rho"] = M.rho, d["area"] = M.area, d["damping"] = M.dampingRatio;
-  d["failure_strain"] = M.failureStrain, d["tension_only"] = M.tensionOnly;
+  d["failure_strain"] = M.failureStrain, d["tension_only"] = M.tensionOnly, d["bending"] = M.bending;
   return d;
 }
 bp::dict energyDict(FabricEngine& e) {
@@ -499,6 +499,7 @@ BOOST_PYTHON_MODULE(_woven) {
       .def_readwrite("damping", &YarnMaterial::dampingRatio, "damping ratio of the highest chain mode [-]")
       .def_readwrite("failure_strain", &YarnMaterial::failureStrain, "strain at break [-]")
       .def_readwrite("tension_only", &YarnMaterial::tensionOnly, "no axial force while slack [bool]")
+      .def_readwrite("bending", &YarnMaterial::bending, "bending stiffness EI [N m^2] (0: none)")
       .def("validate", &YarnMaterial::validate, (bp::arg("prefix") = ""));
   bp::class_<YarnSection>("YarnSection", "Elliptic section at rest (SI).")
       .def_readwrite("width", &YarnSection::width, "[m]")

@@ -14,7 +14,23 @@ Real criticalTimeStep(const Fabric& f) {
     const Real xi = f.damping[e] / std::sqrt(K * me);
     dt = std::min(dt, std::sqrt(me / K) * (std::sqrt(1 + xi * xi) - xi));
   }
-  return dt;
+  // Bending (bendingForces): about a straight chain the transverse stiffness is (k_b / l^2) D^T D, D
+  // the second difference, whose largest eigenvalue is 16: omega^2 = 16 k_b / (m l^2) at a node of
+  // mass m between elements of length l. Taken with the axial limit as 1/dt^2 = 1/dt_a^2 + omega^2 / 4
+  // (the modes share the node): conservative, and the axial limit itself without bending.
+  Real bend = 0;  // largest omega^2 / 4 [1/s^2]
+  for (const Yarn& y : f.yarns) {
+    const Real EI = f.materials[y.material].bending;
+    if (!(EI > 0)) continue;
+    for (Index k = 1; k + 1 < y.nNodes; ++k) {
+      const Index i = y.firstNode + k, e = y.firstElem + k;
+      if (f.invMass[i] == 0) continue;
+      const Real l = std::min(f.restLength[e - 1], f.restLength[e]);
+      const Real kb = 2 * EI / (f.restLength[e - 1] + f.restLength[e]);
+      bend = std::max(bend, 4 * kb * f.invMass[i] / (l * l));
+    }
+  }
+  return bend > 0 ? 1 / std::sqrt(1 / (dt * dt) + bend) : dt;
 }
 
 std::vector<std::uint8_t> slowElements(const Fabric& f, Real outerDt) {
@@ -36,6 +52,7 @@ std::vector<std::uint8_t> slowElements(const Fabric& f, Real outerDt) {
 }
 
 ChainDynamics::ChainDynamics(Fabric& fabric) : f_(fabric), dtCrit_(criticalTimeStep(fabric)) {
+  for (const YarnMaterial& m : f_.materials) bendingOn_ = bendingOn_ || m.bending > 0;
   for (Index i = 0; i < f_.nNodes(); ++i) mass_ += f_.mass[i];
 }
 
@@ -234,6 +251,36 @@ void ChainDynamics::drift(Real dt, Vec3& momentum) {
   });
 }
 
+// Discrete bending at each interior node k of a yarn whose two elements are whole: E_k = k_b (1 - cos
+// theta_k), theta_k the turn between the unit chords u = (x_k - x_{k-1}) / l_1 and w = (x_{k+1} - x_k)
+// / l_2, k_b = 2 EI / (l0_1 + l0_2): for small turns EI theta^2 / (2 l0), the beam's EI kappa^2 / 2 over
+// the node's share of the yarn with kappa = theta / l0 (a node-angle spring, the rest shape straight;
+// Bergou et al.'s discrete elastic rods without twist). F = -dE/dx: with c = u.w, dc/dx_{k-1} = -(w -
+// c u) / l_1, dc/dx_{k+1} = (u - c w) / l_2, x_k takes minus their sum. One thread, in node order
+// (the same bits at any thread count). Returns the energy [J].
+Real ChainDynamics::bendingForces() {
+  Vec3* __restrict F = f_.force.data();
+  const Vec3* __restrict x = f_.pos.data();
+  Real energy = 0;
+  for (const Yarn& y : f_.yarns) {
+    const Real EI = f_.materials[y.material].bending;
+    if (!(EI > 0)) continue;
+    for (Index k = 1; k + 1 < y.nNodes; ++k) {
+      const Index i = y.firstNode + k, e = y.firstElem + k;
+      if (!f_.alive[e - 1] || !f_.alive[e]) continue;  // a broken end bends no further
+      const Vec3 d1 = x[i] - x[i - 1], d2 = x[i + 1] - x[i];
+      const Real l1 = d1.norm(), l2 = d2.norm();
+      const Vec3 u = d1 / l1, w = d2 / l2;
+      const Real c = u.dot(w);
+      const Real kb = 2 * EI / (f_.restLength[e - 1] + f_.restLength[e]);
+      const Vec3 Fa = -kb * (w - c * u) / l1, Fb = kb * (u - c * w) / l2;
+      F[i - 1] += Fa, F[i + 1] += Fb, F[i] -= Fa + Fb;
+      energy += kb * (1 - c);
+    }
+  }
+  return energy;
+}
+
 // The axial spring + dashpot of every CP (paper Eq. 3): T = K(l - l0) + c*ldot along
 // n = (x1-x0)/l, +T*n on the first node and -T*n on the second; tension-only yarns carry no force
 // while slack and their dashpot never pushes (T = max(0, T)). Chains are contiguous, so each node's
@@ -301,7 +348,7 @@ void ChainDynamics::springForces(Real dt) {
   }
   const Real elastic = sums.elastic, dissipated = sums.dissipated;
   if (!std::isfinite(elastic + dissipated)) failNonFinite();
-  books_.elastic = 0.5 * elastic;
+  books_.elastic = 0.5 * elastic + (bendingOn_ ? bendingForces() : 0.0);
   books_.damped += dissipated * dt;  // dashpot power (T-Te)*ldot = c*ldot^2 >= 0 leaves the motion
 }
 

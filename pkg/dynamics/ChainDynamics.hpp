@@ -172,6 +172,7 @@ class ChainDynamics {
   void drift(Real dt, Vec3& momentum);
   template <bool StoreElementState>
   void springForces(Real dt);  // slow elements weighted by slowNow_
+  Real bendingForces();         // adds the yarns' bending forces; returns their energy [J]
   void finishLoads(Real dt);
   void computeForces(Real dt);  // springForces + finishLoads: forces at the current state
   void start();
@@ -188,6 +189,7 @@ class ChainDynamics {
   Real time_ = 0;
   Real dtPrev_ = 0;
   Real dtCrit_ = 0;     // criticalTimeStep of the fabric: the engine's dt limit and the blow-up budget
+  bool bendingOn_ = false;  // some yarn has a bending stiffness (bendingForces; set at construction)
   Real mass_ = 0;       // the fabric's mass [kg] (the blow-up floor)
   Breakage breakage_;
   std::vector<std::uint8_t> slow_;  // per element: 1 slow (multi-rate), empty: one rate

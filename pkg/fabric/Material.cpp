@@ -15,6 +15,8 @@ void YarnMaterial::validate(const std::string& p) const {
           "[0, 10) (damping ratio of the highest chain mode)");
   require(std::isfinite(failureStrain) && failureStrain > 0 && failureStrain <= 10, p + "failure_strain",
           failureStrain, "(0, 10]");
+  require(std::isfinite(bending) && bending >= 0 && bending <= 1, p + "bending", bending,
+          "[0, 1] N m^2 (the yarn's bending stiffness EI; 0: none)");
 }
 
 void YarnSection::validate(const std::string& p) const {

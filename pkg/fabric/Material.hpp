@@ -13,6 +13,9 @@ struct YarnMaterial {
   Real dampingRatio = 0.0;     ///< xi: c = xi*sqrt(K*m_e) per element [-], damping ratio of the highest chain mode
   Real failureStrain = 0.05;   ///< strain at break [-] (used by the breakage model)
   bool tensionOnly = true;     ///< a yarn does not push: no axial force while shorter than its rest length
+  /// Bending stiffness EI of the yarn [N m^2]; 0: none (the paper's chain). A discrete bending energy
+  /// at each interior node (dynamics/ChainDynamics.hpp, bendingForces); straight at rest.
+  Real bending = 0.0;
 
   /// Throws ParameterError naming the bad field and its range.
   void validate(const std::string& prefix = "") const;
