@@ -251,13 +251,15 @@ void ChainDynamics::drift(Real dt, Vec3& momentum) {
   });
 }
 
-// Discrete bending at each interior node k of a yarn whose two elements are whole: E_k = k_b (1 - cos
-// theta_k), theta_k the turn between the unit chords u = (x_k - x_{k-1}) / l_1 and w = (x_{k+1} - x_k)
-// / l_2, k_b = 2 EI / (l0_1 + l0_2): for small turns EI theta^2 / (2 l0), the beam's EI kappa^2 / 2 over
-// the node's share of the yarn with kappa = theta / l0 (a node-angle spring, the rest shape straight;
-// Bergou et al.'s discrete elastic rods without twist). F = -dE/dx: with c = u.w, dc/dx_{k-1} = -(w -
-// c u) / l_1, dc/dx_{k+1} = (u - c w) / l_2, x_k takes minus their sum. One thread, in node order
-// (the same bits at any thread count). Returns the energy [J].
+// Discrete bending at each interior node k of a yarn whose two elements are whole: E_k = (k_b / 2)
+// (theta_k - theta0_k)^2, theta_k the turn between the unit chords u = (x_k - x_{k-1}) / l_1 and w =
+// (x_{k+1} - x_k) / l_2, theta0_k its turn as built (Fabric::restTurn: a weave starts stress-free and
+// resists a change of its crimp), k_b = 2 EI / (l0_1 + l0_2): the beam's EI (kappa - kappa0)^2 / 2 over
+// the node's share of the yarn with kappa = theta / l0 (a node-angle spring, Bergou et al.'s
+// discrete elastic rods without twist). F = -dE/dx with theta = atan2(|u x w|, u.w): dtheta/dx =
+// -(1/sin theta) dc/dx, c = u.w, dc/dx_{k-1} = -(w - c u) / l_1, dc/dx_{k+1} = (u - c w) / l_2, x_k
+// taking minus their sum; a node turned by less than 1e-12 rad has no direction to be pushed in and
+// takes no force. One thread, in node order (the same bits at any thread count). Returns the energy [J].
 Real ChainDynamics::bendingForces() {
   Vec3* __restrict F = f_.force.data();
   const Vec3* __restrict x = f_.pos.data();
@@ -271,11 +273,14 @@ Real ChainDynamics::bendingForces() {
       const Vec3 d1 = x[i] - x[i - 1], d2 = x[i + 1] - x[i];
       const Real l1 = d1.norm(), l2 = d2.norm();
       const Vec3 u = d1 / l1, w = d2 / l2;
-      const Real c = u.dot(w);
+      const Real c = u.dot(w), sn = u.cross(w).norm();
+      const Real turn = std::atan2(sn, c) - f_.restTurn[i];
       const Real kb = 2 * EI / (f_.restLength[e - 1] + f_.restLength[e]);
-      const Vec3 Fa = -kb * (w - c * u) / l1, Fb = kb * (u - c * w) / l2;
+      energy += 0.5 * kb * turn * turn;
+      if (!(sn > 1e-12)) continue;
+      const Real g = kb * turn / sn;
+      const Vec3 Fa = -g * (w - c * u) / l1, Fb = g * (u - c * w) / l2;
       F[i - 1] += Fa, F[i + 1] += Fb, F[i] -= Fa + Fb;
-      energy += kb * (1 - c);
     }
   }
   return energy;

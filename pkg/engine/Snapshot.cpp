@@ -8,10 +8,10 @@ namespace woven {
 
 namespace {
 
-// WOVENSN2 (this build's): the collision stage's memory after the breaks, the substeps and the
-// multi-rate flag always. WOVENSN1 (read): no memory, the substeps and flag only when set.
-constexpr char kMagic[8] = {'W', 'O', 'V', 'E', 'N', 'S', 'N', '2'};
-constexpr char kMagic1[8] = {'W', 'O', 'V', 'E', 'N', 'S', 'N', '1'};
+// WOVENSN3 (this build's): the collision stage's memory after the breaks, the substeps and the
+// multi-rate flag always, the yarns' rest turns (bending) and their materials with the bending
+// stiffness. Earlier formats laid the fabric and its materials out otherwise: refused.
+constexpr char kMagic[8] = {'W', 'O', 'V', 'E', 'N', 'S', 'N', '3'};
 
 std::uint64_t fnv64(const char* p, std::size_t n) {
   std::uint64_t h = 1469598103934665603ull;
@@ -20,7 +20,7 @@ std::uint64_t fnv64(const char* p, std::size_t n) {
 }
 
 [[noreturn]] void snapshotFails(const std::string& what) {
-  throw ParameterError("snapshot", what, "bytes written by woven::engineSnapshot (format WOVENSN2 or WOVENSN1)");
+  throw ParameterError("snapshot", what, "bytes written by woven::engineSnapshot of this build (format WOVENSN3)");
 }
 
 // Plain structs go as their bytes (trivially copyable, same build): checked at compile time.
@@ -58,6 +58,7 @@ std::string engineSnapshot(FabricEngine& e) {
   o.vec(f.pos), o.vec(f.vel), o.vec(f.mass), o.vec(f.invMass), o.vec(f.nodeYarn);
   o.vec(f.secRadius), o.vec(f.secFlat), o.vec(f.secDir);
   o.vec(f.elem0), o.vec(f.restLength), o.vec(f.stiffness), o.vec(f.damping), o.vec(f.alive), o.vec(f.elemYarn);
+  o.vec(f.restTurn);
   o.vec(f.yarns), o.vec(f.materials);
   // Loads and limits.
   const Loads& L = d.loads();
@@ -97,8 +98,7 @@ std::string engineSnapshot(FabricEngine& e) {
 }
 
 std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
-  const bool sn2 = bytes.size() >= 16 && std::memcmp(bytes.data(), kMagic, 8) == 0;
-  if (!sn2 && (bytes.size() < 16 || std::memcmp(bytes.data(), kMagic1, 8) != 0)) snapshotFails("no WOVENSN2 or WOVENSN1 header");
+  if (bytes.size() < 16 || std::memcmp(bytes.data(), kMagic, 8) != 0) snapshotFails("no WOVENSN3 header");
   std::uint64_t sum;
   std::memcpy(&sum, bytes.data() + bytes.size() - 8, 8);
   if (sum != fnv64(bytes.data(), bytes.size() - 8)) snapshotFails("checksum mismatch");
@@ -108,9 +108,10 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
   in.vec(f.pos), in.vec(f.vel), in.vec(f.mass), in.vec(f.invMass), in.vec(f.nodeYarn);
   in.vec(f.secRadius), in.vec(f.secFlat), in.vec(f.secDir);
   in.vec(f.elem0), in.vec(f.restLength), in.vec(f.stiffness), in.vec(f.damping), in.vec(f.alive), in.vec(f.elemYarn);
+  in.vec(f.restTurn);
   in.vec(f.yarns), in.vec(f.materials);
   const std::size_t n = f.pos.size(), ne = f.elem0.size();
-  if (f.vel.size() != n || f.mass.size() != n || f.invMass.size() != n || f.nodeYarn.size() != n ||
+  if (f.vel.size() != n || f.mass.size() != n || f.invMass.size() != n || f.nodeYarn.size() != n || f.restTurn.size() != n ||
       f.secRadius.size() != n || f.secFlat.size() != n || f.secDir.size() != n || f.restLength.size() != ne ||
       f.stiffness.size() != ne || f.damping.size() != ne || f.alive.size() != ne || f.elemYarn.size() != ne)
     in.fail("inconsistent array sizes");
@@ -183,7 +184,7 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
   getBreakEvents(in, s.breakage.log);
   int substeps = 1;
   bool multiRate = false;
-  if (sn2) {
+  {
     const auto nc = static_cast<std::size_t>(in.count(1));
     s.contacts.assign(body.data() + in.at(), nc);
     in.skip(nc);
@@ -192,11 +193,6 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
     const auto flag = in.get<std::uint8_t>();
     if (flag > 1) in.fail("multi-rate flag other than 0 or 1");
     multiRate = flag == 1;
-  } else if (const std::size_t left = in.left(); left == sizeof(std::int32_t) || left == sizeof(std::int32_t) + 1) {
-    substeps = in.get<std::int32_t>();
-    if (substeps < 2 || substeps > 64) in.fail("substeps outside [2, 64]");
-    if (left > sizeof(std::int32_t) && in.get<std::uint8_t>() != 1) in.fail("multi-rate flag other than 1");
-    multiRate = left > sizeof(std::int32_t);
   }
   if (in.left() != 0) in.fail("trailing bytes");
   if (substeps > 1) e->setSubsteps(substeps);

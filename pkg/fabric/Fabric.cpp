@@ -59,6 +59,7 @@ Index Fabric::addYarn(const Vec3Array& pts, const YarnMaterial& mat, const YarnS
     force.push_back(Vec3::Zero());
     mass.push_back(0.0);
     nodeYarn.push_back(yi);
+    restTurn.push_back(0.0);
     secRadius.push_back(r0);
     secFlat.push_back(0.0);
     secDir.push_back(Vec3::UnitZ());  // any normal to the yarn: made so by updateSectionFrames
@@ -75,6 +76,10 @@ Index Fabric::addYarn(const Vec3Array& pts, const YarnMaterial& mat, const YarnS
     elemYarn.push_back(yi);
     mass[a] += 0.5 * me[j];
     mass[a + 1] += 0.5 * me[j];
+  }
+  for (Index k = 1; k < nE; ++k) {  // the turn between the chords at each interior node
+    const Vec3 u = (pts[k] - pts[k - 1]).normalized(), w = (pts[k + 1] - pts[k]).normalized();
+    restTurn[y.firstNode + k] = std::atan2(u.cross(w).norm(), u.dot(w));
   }
   invMass.resize(mass.size());
   for (Index i = y.firstNode; i < nNodes(); ++i) invMass[i] = 1.0 / mass[i];

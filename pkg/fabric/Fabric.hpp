@@ -30,6 +30,9 @@ struct Fabric {
   std::vector<Real> mass;      ///< lumped mass rho*A*l0/2 from each adjoining element [kg]
   std::vector<Real> invMass;   ///< 1/mass, 0 for kinematic (fixed or velocity-driven) nodes [1/kg]
   std::vector<Index> nodeYarn; ///< yarn of each node
+  /// The yarn's turn at each node as built, between its two chords [rad] (0 at a yarn's ends): the
+  /// rest shape of the bending energy (YarnMaterial::bending), so a weave is built stress-free.
+  std::vector<Real> restTurn;
 
   // --- cross-sections at the nodes (paper Sec. 5.2.2; shape/Section.hpp) ---
   std::vector<Real> secRadius; ///< natural radius r0 of the circular section at rest [m]

@@ -283,7 +283,7 @@ def load_sharing(engine, X0, centre, half_size, places0=None):
         table[fam][b] += float(energy[y])
         count[fam][b] += 1
         where.append(b)
-    loaded = energy >= 0.01 * energy.max() if len(energy) and energy.max() > 0 else np.zeros(len(energy), bool)
+    loaded = energy >= 0.1 * energy.max() if len(energy) and energy.max() > 0 else np.zeros(len(energy), bool)
     out = {'energy': table, 'yarns': count,
            'loaded_yarns': {b: int(sum(1 for y in range(len(where)) if loaded[y] and where[y] == b)) for b in bins},
            'total': float(np.sum(energy))}

@@ -31,8 +31,8 @@ WEAVE_KEYS = {
     'linear_density': (None, 'kg/m', 'yarn linear density (sets area = linear_density/rho)'),
     'damping': (None, '', 'damping ratio of the highest chain mode (c = xi*sqrt(K*m_e))'),
     'failure_strain': (None, '', 'strain at break'),
-    'bending': (None, 'N m^2', 'bending stiffness EI of a yarn, [0, 1] (0: none, the paper\'s chain; KM2 600 den '
-                'filaments alone: about 3e-8; docs/chain.md)'),
+    'bending_stiffness': (None, 'N m^2', 'bending stiffness EI of a yarn, [0, 1] (0: none, the paper\'s chain; KM2 '
+                          '600 den filaments alone: about 3e-8; docs/chain.md)'),
     'tension_only': (None, '', 'yarns carry no compression (1) or do (0)'),
     'crimp': (None, '', 'crimp of both families; < 0 = Peirce with touching yarns'),
     'warp_crimp': (None, '', 'warp crimp; < 0 = Peirce'),
@@ -53,7 +53,7 @@ WEAVE_RANGES = {
     'spacing': (1e-8, 1, 'm'), 'warp_spacing': (1e-8, 1, 'm'), 'weft_spacing': (1e-8, 1, 'm'),
     'width': (1e-8, 1, 'm'), 'thickness': (1e-8, 1, 'm'), 'E': (1e5, 1e13, 'Pa'), 'rho': (1, 1e5, 'kg/m^3'),
     'area': (1e-16, 1e-2, 'm^2'), 'linear_density': (1e-16, 1e3, 'kg/m'), 'damping': (0, 9.999, ''),
-    'failure_strain': (1e-12, 10, ''), 'bending': (0, 1, 'N m^2'), 'tension_only': (0, 1, ''), 'crimp': (-1e300, 0.999999, ''),
+    'failure_strain': (1e-12, 10, ''), 'bending_stiffness': (0, 1, 'N m^2'), 'tension_only': (0, 1, ''), 'crimp': (-1e300, 0.999999, ''),
     'warp_crimp': (-1e300, 0.999999, ''), 'weft_crimp': (-1e300, 0.999999, ''), 'cp_per_span': (1, 1000, ''),
     'fine_radius': (-1e300, 1e3, 'm'), 'cp_coarse': (1, 1000, ''), 'fine_x': (-1e3, 1e3, 'm'), 'fine_y': (-1e3, 1e3, 'm'),
 }
@@ -152,9 +152,11 @@ def weave(**kw):
         for key in ('width', 'thickness'):
             if key in num:
                 setattr(sec, key, num[key])
-        for key in ('E', 'rho', 'area', 'damping', 'failure_strain', 'bending'):
+        for key in ('E', 'rho', 'area', 'damping', 'failure_strain'):
             if key in num:
                 setattr(mat, key, num[key])
+        if 'bending_stiffness' in num:
+            mat.bending = num['bending_stiffness']
         if 'linear_density' in num:
             area = num['linear_density'] / mat.rho
             if not (1e-16 <= area <= 1e-2):
