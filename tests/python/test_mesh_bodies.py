@@ -116,20 +116,27 @@ def test_make_meshes_script(tmp_path):
     assert rc != 0 and 'segments = 3 is invalid' in out
 
 
+def _settled_ply(yade_ns):
+    """A settled 3 x 3 KM2 ply with collisions in a fresh scene: (engine, positions, a height 0.2 mm
+    below its lowest node)."""
+    import woven
+    O = yade_ns.O
+    O.reset()
+    O.engines = []
+    e = woven.weave(preset='km2_706', nx=3, ny=3, cp_per_span=2).engine
+    woven.contact.enable(e, position_correction=0)
+    e.settle_sections()
+    X = woven.positions(e)
+    return e, X, X[:, 2].min() - 0.2e-3
+
+
 def test_wall_stops_the_fabric(yade_ns):
     """A YADE Wall (sense +1) under a ply, moving up at 20 m/s as a kinematic body, lifts the ply
     without letting it through; a two-sided wall (sense 0) is refused naming sense."""
     import woven
     from yade import utils, Vector3
     O = yade_ns.O
-    O.reset()
-    O.engines = []
-    w = woven.weave(preset='km2_706', nx=3, ny=3, cp_per_span=2)
-    e = w.engine
-    woven.contact.enable(e, position_correction=0)
-    e.settle_sections()
-    X = woven.positions(e)
-    z0 = X[:, 2].min() - 0.2e-3
+    e, _, z0 = _settled_ply(yade_ns)
     bad = O.bodies.append(utils.wall((0, 0, z0), axis=2, sense=0))
     with pytest.raises(ValueError, match='sense = 0 of wall'):
         woven.coupling.couple(e, [bad])
@@ -175,14 +182,7 @@ def test_facet_sheet_stops_the_fabric(yade_ns):
     import woven
     from yade import Vector3
     O = yade_ns.O
-    O.reset()
-    O.engines = []
-    w = woven.weave(preset='km2_706', nx=3, ny=3, cp_per_span=2)
-    e = w.engine
-    woven.contact.enable(e, position_correction=0)
-    e.settle_sections()
-    X = woven.positions(e)
-    z0 = X[:, 2].min() - 0.2e-3
+    e, X, z0 = _settled_ply(yade_ns)
     lo, hi = X.min(axis=0) - 1e-3, X.max(axis=0) + 1e-3
     v = np.array([[lo[0], lo[1], z0], [hi[0], lo[1], z0], [hi[0], hi[1], z0], [lo[0], hi[1], z0]])
     ids = [O.bodies.append(b) for b in _facets_of(v, [(0, 1, 2), (0, 2, 3)])]
