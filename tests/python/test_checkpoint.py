@@ -187,6 +187,7 @@ def test_scene_without_fabric_drops_a_stale_sidecar(tmp_path, yade_ns):
 # into the ply at step 120; with breakage, elements have broken by then.
 BALLISTIC = '''
 import os, sys
+import numpy as np
 os.environ['WOVEN_NATIVE'] = '0'
 import woven
 from woven import ballistic
@@ -196,8 +197,28 @@ breakage = sys.argv[1] == '1'
 ply = ballistic.build_ply(dict(preset='km2_706', nx=4, ny=4, cp_per_span=2), {}, clamp=4,
                           breakage={'strain': 0.0} if breakage else None)
 O.engines = [ForceResetter(), NewtonIntegrator(damping=0, gravity=(0, 0, 0))]
-ballistic.add_projectile(ply, shape='box', mass=1.1e-3, size=2e-3, V=300.0)
 e = ply.engine
+if sys.argv[5] == 'mesh':
+    # A mesh projectile (the triangles of a cube's STL), a YADE Facet sheet close under the ply and a
+    # Wall below it: the triangle form's held sides and supports must come back with the state.
+    from yade import utils
+    from woven import mesh
+    v = np.array([[x, y, z] for x in (0, 2e-3) for y in (0, 2e-3) for z in (0, 2e-3)]) - 1e-3
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    path = os.path.join(os.path.dirname(sys.argv[3]), 'cube.stl')
+    mesh.write_stl(path, v, [(q[0], q[1], q[2]) for q in quads] + [(q[0], q[2], q[3]) for q in quads])
+    p = ballistic.add_projectile(ply, shape='mesh', mass=1.1e-3, V=300.0, solid=mesh.solid(path, mass=1.1e-3))
+    X = woven.positions(e)
+    lo, hi, z = X.min(axis=0) - 1e-3, X.max(axis=0) + 1e-3, X[:, 2].min() - ply.thickness - 2e-5
+    c = [(lo[0], lo[1], z), (hi[0], lo[1], z), (hi[0], hi[1], z), (lo[0], hi[1], z)]
+    sheet = [O.bodies.append(utils.facet([c[0], c[1], c[2]], fixed=True)),
+             O.bodies.append(utils.facet([c[0], c[2], c[3]], fixed=True))]
+    wall = O.bodies.append(utils.wall((0, 0, z - 3e-4), axis=2, sense=1))
+    for i in sheet + [wall]:
+        O.bodies[i].dynamic = False
+    woven.coupling.couple(e, sheet + [wall])
+else:
+    p = ballistic.add_projectile(ply, shape='box', mass=1.1e-3, size=2e-3, V=300.0)
 woven.attach(e, set_dt=True)
 if sys.argv[2] == 'straight':
     O.run(120, True)
@@ -206,19 +227,19 @@ if sys.argv[2] == 'straight':
 else:
     O.load(sys.argv[3])
     O.run(120, True)
-b = O.bodies[len(O.bodies) - 1].state
+b = O.bodies[p.id].state
 open(sys.argv[4], 'w').write(repr((sorted(e.energy().items()), len(e.break_log()), e.iter,
                                    woven.positions(e).tobytes(), tuple(b.pos) + tuple(b.vel))))
 '''
 
 
-@pytest.mark.parametrize('breakage', ['0', '1'])
-def test_continued_run_keeps_every_energy_book(tmp_path, breakage):
+@pytest.mark.parametrize('breakage,bodies', [('0', 'box'), ('1', 'box'), ('1', 'mesh')])
+def test_continued_run_keeps_every_energy_book(tmp_path, breakage, bodies):
     script = tmp_path / 'ballistic_ckp.py'
     script.write_text(BALLISTIC)
     ckp, a, b = str(tmp_path / 'run.yade.gz'), str(tmp_path / 'straight'), str(tmp_path / 'continued')
     for mode, out in (('straight', a), ('continued', b)):
-        r = subprocess.run(['yade', '-n', '-x', str(script), breakage, mode, ckp, out], capture_output=True,
+        r = subprocess.run(['yade', '-n', '-x', str(script), breakage, mode, ckp, out, bodies], capture_output=True,
                            text=True, timeout=180, cwd=str(tmp_path))
         assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     straight, continued = eval(open(a).read()), eval(open(b).read())
