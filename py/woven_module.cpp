@@ -350,7 +350,16 @@ bp::dict bodyDict(FabricEngine& e, int k) {
   bp::dict d;
   d["id"] = b.id, d["mass"] = b.mass, d["inertia"] = b.inertia, d["pos"] = b.pos, d["ori"] = b.ori;
   d["vel"] = b.vel, d["ang_vel"] = b.angVel, d["kinetic_energy"] = b.kineticEnergy(), d["parts"] = b.parts.size();
+  d["friction"] = b.friction;
   return d;
+}
+// A body's own Coulomb coefficient with the yarns (negative: the law's body_friction again).
+void setBodyFriction(FabricEngine& e, int k, Real mu) {
+  RigidBody& b = bodyAt(e, k);
+  require(std::isfinite(mu) && mu <= 2, "body friction", mu, "[0, 2], or negative for the law's body_friction");
+  require(!(mu > 0 && bodyStage(e).params().response == Response::Penalty), "body friction", mu,
+          "0 with response 'penalty' (Coulomb friction acts in the impulse rows only)");
+  b.friction = mu < 0 ? -1.0 : mu;
 }
 void setBodyState(FabricEngine& e, int k, const Vec3& pos, const Quat& ori, const Vec3& vel, const Vec3& angVel) {
   RigidBody& b = bodyAt(e, k);
@@ -716,7 +725,10 @@ BOOST_PYTHON_MODULE(_woven) {
            "offset, Quaternion) (a lone facet, both faces outside)] in the body frame, mass [kg] (0 or inf: kinematic), principal inertia [kg m^2], pos [m], ori, vel [m/s], "
            "ang_vel [rad/s]. Returns its index.")
       .add_property("n_bodies", +[](FabricEngine& e) { return e.collisions() ? static_cast<int>(e.collisions()->bodies.size()) : 0; })
-      .def("body", &bodyDict, (bp::arg("index")), "dict: id, mass, inertia, pos, ori, vel, ang_vel, kinetic_energy [J], parts")
+      .def("body", &bodyDict, (bp::arg("index")),
+           "dict: id, mass, inertia, pos, ori, vel, ang_vel, kinetic_energy [J], parts, friction (negative: body_friction)")
+      .def("set_body_friction", &setBodyFriction, (bp::arg("index"), bp::arg("mu")),
+           "body `index`'s own Coulomb coefficient with the yarns, [0, 2] (negative: the law's body_friction)")
       .def("set_body_state", &setBodyState, (bp::arg("index"), bp::arg("pos"), bp::arg("ori"), bp::arg("vel"), bp::arg("ang_vel")),
            "State at the start of the next step (SI).")
       .def("body_overlap", +[](FabricEngine& e, int k) { bodyAt(e, k); return bodyStage(e).bodyOverlap(e.fabric(), k); },

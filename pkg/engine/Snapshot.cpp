@@ -8,10 +8,11 @@ namespace woven {
 
 namespace {
 
-// WOVENSN3 (this build's): the collision stage's memory after the breaks, the substeps and the
-// multi-rate flag always, the yarns' rest turns (bending) and their materials with the bending
-// stiffness. Earlier formats laid the fabric and its materials out otherwise: refused.
-constexpr char kMagic[8] = {'W', 'O', 'V', 'E', 'N', 'S', 'N', '3'};
+// WOVENSN4 (this build's): the collision stage's memory after the breaks, the substeps and the
+// multi-rate flag always, the yarns' rest turns (bending), their materials with the bending
+// stiffness, each body's own friction. Earlier formats laid the fabric, its materials and bodies
+// out otherwise: refused.
+constexpr char kMagic[8] = {'W', 'O', 'V', 'E', 'N', 'S', 'N', '4'};
 
 std::uint64_t fnv64(const char* p, std::size_t n) {
   std::uint64_t h = 1469598103934665603ull;
@@ -20,7 +21,7 @@ std::uint64_t fnv64(const char* p, std::size_t n) {
 }
 
 [[noreturn]] void snapshotFails(const std::string& what) {
-  throw ParameterError("snapshot", what, "bytes written by woven::engineSnapshot of this build (format WOVENSN3)");
+  throw ParameterError("snapshot", what, "bytes written by woven::engineSnapshot of this build (format WOVENSN4)");
 }
 
 // Plain structs go as their bytes (trivially copyable, same build): checked at compile time.
@@ -80,7 +81,7 @@ std::string engineSnapshot(FabricEngine& e) {
         if (q.type == RigidPart::Type::Triangle) o.put(q.vert[0]), o.put(q.vert[1]), o.put(q.vert[2]), o.put(std::uint8_t(q.twoSided));
       }
       o.put(b.mass), o.put(b.inertia), o.put(b.pos);
-      o.put(b.ori.coeffs().eval()), o.put(b.vel), o.put(b.angVel);
+      o.put(b.ori.coeffs().eval()), o.put(b.vel), o.put(b.angVel), o.put(b.friction);
     }
   }
   // State (FabricEngine::state: what setState puts back).
@@ -98,7 +99,7 @@ std::string engineSnapshot(FabricEngine& e) {
 }
 
 std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
-  if (bytes.size() < 16 || std::memcmp(bytes.data(), kMagic, 8) != 0) snapshotFails("no WOVENSN3 header");
+  if (bytes.size() < 16 || std::memcmp(bytes.data(), kMagic, 8) != 0) snapshotFails("no WOVENSN4 header");
   std::uint64_t sum;
   std::memcpy(&sum, bytes.data() + bytes.size() - 8, 8);
   if (sum != fnv64(bytes.data(), bytes.size() - 8)) snapshotFails("checksum mismatch");
@@ -171,7 +172,7 @@ std::shared_ptr<FabricEngine> restoreSnapshot(const std::string& bytes) {
       }
       b.mass = in.get<Real>();
       b.inertia = in.get<Vec3>(), b.pos = in.get<Vec3>(), b.ori.coeffs() = in.get<Eigen::Matrix<Real, 4, 1>>();
-      b.vel = in.get<Vec3>(), b.angVel = in.get<Vec3>();
+      b.vel = in.get<Vec3>(), b.angVel = in.get<Vec3>(), b.friction = in.get<Real>();
       b.validate();
       st.bodies.push_back(b);
     }

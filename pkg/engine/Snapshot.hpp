@@ -8,7 +8,7 @@
 // test every pair at their next step). Not kept: the collision statistics and timers, the last good
 // state (the restored state is the last good one), and flattening=springs' rest sections.
 //
-// Format "WOVENSN3", little-endian as in memory, ending with an FNV-1a 64 checksum of the bytes before
+// Format "WOVENSN4", little-endian as in memory, ending with an FNV-1a 64 checksum of the bytes before
 // it; restoreSnapshot refuses a truncated, altered or foreign blob (ParameterError "snapshot") and
 // checks the state as FabricEngine::setState does.
 #pragma once

@@ -45,7 +45,7 @@ void ImpulseLaw::loadBodies(const std::vector<RigidBody>* bodies) {
   if (!bodies) return;
   for (const RigidBody& b : *bodies)
     bodyVel_.push_back({b.vel, b.angVel, b.invMass(), b.invInertiaWorld(), b.kineticEnergy(), b.vel,
-                        b.dynamic() ? Vec3(0.5 * b.hostKick) : Vec3(Vec3::Zero())});
+                        b.dynamic() ? Vec3(0.5 * b.hostKick) : Vec3(Vec3::Zero()), b.friction});
 }
 
 Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies, bool afterDrift) {
@@ -177,7 +177,8 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   dt_ = dt;
   keepVelocities(f);
 
-  const bool friction = p.friction > 0 || p.bodyFriction > 0;
+  const bool friction = p.friction > 0 || p.bodyFriction > 0 ||
+                        std::any_of(bodyVel_.begin(), bodyVel_.end(), [](const BodyVelocity& b) { return b.friction > 0; });
   if (friction) {
     // the row's half kick: its nodes' (forces and the body acceleration of the free ones) and, on a
     // body row, the body's (half its host kick); less half the row's velocity before the solve (header)
@@ -320,7 +321,7 @@ Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool fricti
   const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
   Vec3 J = (lambda - r.lambda) * r.normal;
   r.lambda = lambda;
-  const Real mu = r.body >= 0 ? p.bodyFriction : p.friction;
+  const Real mu = r.body < 0 ? p.friction : bodyVel_[r.body].friction >= 0 ? bodyVel_[r.body].friction : p.bodyFriction;
   Vec3 Jt = Vec3::Zero();
   if (friction && mu > 0) {  // Coulomb: cancel the tangential slip, within the cone mu * lambda
     const Vec3 vt = vr - vn * r.normal;

@@ -147,6 +147,7 @@ class ImpulseLaw {
     Real ke0 = 0;        // kinetic energy before the impulses [J]
     Vec3 v0 = Vec3::Zero();        // velocity before the impulses [m/s]
     Vec3 halfKick = Vec3::Zero();  // RigidBody::hostKick / 2 of a dynamic body [m/s]
+    Real friction = -1;            // RigidBody::friction (negative: ContactParams::bodyFriction)
   };
   Vec3 rowVelocity(const Fabric& f, const Row& r) const;     // relative velocity of the contact points
   void applyRow(Fabric& f, const Row& r, const Vec3& J);      // J on B, -J on A

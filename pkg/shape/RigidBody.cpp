@@ -28,6 +28,8 @@ void RigidBody::validate() const {
     require(p.offset.allFinite() && p.offset.norm() <= 10, "offset", p.offset.norm(), "finite, |offset| <= 10 m");
     require(unit(p.ori), "part orientation", p.ori.norm(), "a finite unit quaternion (|q| = 1 within 1e-6)");
   }
+  require(friction < 0 || (std::isfinite(friction) && friction <= 2), "body friction", friction,
+          "[0, 2], or negative for the law's body_friction");
   require(!std::isnan(mass) && mass >= 0 && (mass <= 1e6 || std::isinf(mass)), "mass", mass,
           "[0, 1e6] kg, or inf (0 or inf: kinematic body)");
   if (dynamic())

@@ -49,6 +49,10 @@ struct RigidBody {
   Quat ori = Quat::Identity();
   Vec3 vel = Vec3::Zero();       ///< [m/s]
   Vec3 angVel = Vec3::Zero();    ///< [rad/s], global frame
+  /// Coulomb coefficient between this body and the yarns, in [0, 2]; negative: the law's
+  /// body_friction (ContactParams::bodyFriction). A clamp's jaws hold the yarns by their own
+  /// friction, whatever the projectile's.
+  Real friction = -1;
   /// The velocity the host's integrator added over its last step [m/s]: YADE's NewtonIntegrator kicks
   /// the body by O.dt (gravity + forces) / m between two woven steps, so this is the velocity
   /// setHostState reads less the one woven left the body with. The energy books count the body's

@@ -87,11 +87,13 @@ def _closed_faces(parts):
     return out
 
 
-def couple(engine, ids, parts=None):
+def couple(engine, ids, parts=None, friction=None):
     """Makes the YADE bodies `ids` collide with the fabric of `engine` (collisions must be on).
 
     `parts` (optional) maps a body id to its woven parts, for a body whose YADE shape is a stand-in
     (YADE has no cylinder: woven.projectiles), else the parts come from the YADE shape.
+    `friction` (optional): these bodies' own Coulomb coefficient with the yarns, in [0, 2] (a
+    clamp's jaws); None: the engine's body_friction (woven.contact), as for every other body.
 
     A body that YADE does not integrate (b.dynamic False) is kinematic for the fabric: impulses do
     not change its motion. Returns the woven body indices. Raises ValueError for an unknown id, a
@@ -101,6 +103,8 @@ def couple(engine, ids, parts=None):
     if not engine.collisions_enabled:
         raise ValueError('collisions = off is invalid: allowed on (woven.contact.enable(engine) before couple)')
     ids = list(ids)
+    if friction is not None and not (isinstance(friction, numbers.Real) and 0 <= friction <= 2):
+        raise ValueError('friction = %r is invalid: allowed [0, 2] (or None: body_friction)' % (friction,))
     coupled = {engine.body(k)['id'] for k in range(engine.n_bodies)}
     out = []
     for i in ids:
@@ -127,4 +131,6 @@ def couple(engine, ids, parts=None):
         # add_body refuses a body that starts inside the fabric, naming it
         out.append(engine.add_body(i, parts[i] if parts and i in parts else _parts_of(b), mass, s.inertia, s.pos, s.ori,
                                    s.vel, s.angVel))
+        if friction is not None:
+            engine.set_body_friction(out[-1], float(friction))
     return out

@@ -46,7 +46,9 @@ struct Wrap {
 
 // The drum lies along y through the origin; the wrap is symmetric about +z, in the x-z plane.
 // Side j touches the circle of radius rho = R + r (+ a 0.1 um gap) at angle beta_j from +z.
-Wrap makeWrap(Real theta, Real mu) {
+// own: the drum holds the yarn with its own coefficient mu (RigidBody::friction) while the law's
+// body_friction is another (0.7), which must then play no part.
+Wrap makeWrap(Real theta, Real mu, bool own = false) {
   const Real rho = kDrum + kRadius + 1e-7, phi = theta / kSides;
   const auto beta = [&](int j) { return -0.5 * theta + j * phi; };
   const auto tangent = [&](int j) { return Vec3(std::cos(beta(j)), 0, -std::sin(beta(j))); };
@@ -68,7 +70,7 @@ Wrap makeWrap(Real theta, Real mu) {
   w.first = 0, w.last = nWrap - 1, w.middle = nWrap / 2;
   w.outFirst = -tangent(0), w.outLast = tangent(kSides);
   ContactParams p;
-  p.friction = mu, p.bodyFriction = mu;
+  p.friction = mu, p.bodyFriction = own ? 0.7 : mu;
   p.positionCorrection = 0;
   // Rigid sections: geometric flattening would squash the drum to its MCD at no force and leave a
   // wrap of unknown shape (the capstan holds for any convex drum, but the tails then leave it at
@@ -81,6 +83,7 @@ Wrap makeWrap(Real theta, Real mu) {
   c.type = RigidPart::Type::Cylinder, c.radius = kDrum, c.halfLength = 6e-3;
   c.ori = Quat(Eigen::AngleAxis<Real>(kPi / 2, Vec3::UnitX()));
   drum.parts.push_back(c);
+  if (own) drum.friction = mu;
   w.e->collisions()->bodies.push_back(drum);
   return w;
 }
@@ -104,8 +107,8 @@ void step(Wrap& w, Real dt) {
 
 // Sliding: T1 a dead load on the first end (ramped in while the last end is held), then the last
 // end drawn out at `speed` for `time`; the mean pull of its support over the last 40 % of the draw.
-Real slidingPull(Real theta, Real mu, Real T1, Real speed, Real time) {
-  Wrap w = makeWrap(theta, mu);
+Real slidingPull(Real theta, Real mu, Real T1, Real speed, Real time, bool own = false) {
+  Wrap w = makeWrap(theta, mu, own);
   ChainDynamics& d = w.e->dynamics();
   const Real dt = 0.8 * w.e->criticalDt();
   d.fix(w.last);
@@ -154,6 +157,20 @@ TEST(Capstan, SlidingYarnIsPulledWithT1ExpMuTheta) {
                 std::exp(mu * theta), discreteCapstan(theta, mu));
     EXPECT_NEAR(T2 / (T1 * std::exp(mu * theta)), 1.0, 0.02) << "theta " << theta << " mu " << mu << ": T2 " << T2;
   }
+}
+
+TEST(Capstan, ADrumsOwnFrictionOverridesTheLawsBodyFriction) {
+  // A clamp's jaws hold with their own coefficient: the drum's 0.3 and 0 against the law's 0.7.
+  const Real T1 = 1.0, speed = 0.05, time = 5e-4, theta = kPi / 2;
+  for (const Real mu : {0.0, 0.3}) {
+    const Real T2 = slidingPull(theta, mu, T1, speed, time, true);
+    EXPECT_NEAR(T2 / (T1 * std::exp(mu * theta)), 1.0, 0.02) << "drum mu " << mu << ": T2 " << T2;
+  }
+  RigidBody b;
+  b.parts.resize(1);
+  b.parts[0].type = RigidPart::Type::Sphere, b.parts[0].radius = 1e-3;
+  b.friction = 2.5;
+  EXPECT_EQ(parameterOf([&] { b.validate(); }), "body friction");
 }
 
 TEST(Capstan, HeldYarnStaysBelowExpMuThetaAndSlidesAbove) {

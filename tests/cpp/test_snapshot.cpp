@@ -59,7 +59,7 @@ TEST(Snapshot, RestoredEngineContinuesBitForBit) {
 }
 
 // Spring substeps are part of the engine's settings: the restored engine takes the same long
-// steps and continues bit for bit (format WOVENSN3 writes the substeps and the multi-rate flag
+// steps and continues bit for bit (format WOVENSN4 writes the substeps and the multi-rate flag
 // always: the bytes' size does not change with them).
 TEST(Snapshot, SubstepsRoundTrip) {
   auto a = struckPly();
