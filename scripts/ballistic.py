@@ -77,6 +77,12 @@ defaults.update({
     'backing': ('none', '', "'none', 'wall' (a fixed YADE Wall: a rigid plane) or 'facet' (a fixed plate of two YADE "
                 "Facets, 1.5 side across) backing_standoff below the pack"),
     'backing_standoff': (5e-3, 'm', 'gap between the lowest yarn section and the backing wall, (0, 0.1] m'),
+    'frame': ('none', '', "'none', or 'mesh': the edges held between two fixed jaws (closed square-ring meshes of YADE "
+              "Facets, clumped) instead of fixed yarn ends; needs clamp=0"),
+    'frame_width': (5e-3, 'm', 'frame mesh: how much of every edge the jaws cover, (0, side/4] m'),
+    'frame_gap': (1e-6, 'm', 'frame mesh: clearance between each jaw and the nearest yarn sections, (0, 1e-3] m'),
+    'frame_edge': (5e-4, 'm', 'frame mesh: radius of the jaws\' window edge on the ply\'s side, [0, min(1e-3, frame_width)] m (0: a right angle)'),
+    'frame_friction': (0.3, '', "frame mesh: Coulomb coefficient between the jaws and the yarns, [0, 2] (the projectile's is body_friction)"),
     'plies': (1, '', 'plies in the pack, [1, 40] (woven.pack: copies of the ply stacked below the first)'),
     'ply_gap': (-1.0, 'm', 'clear gap between neighbouring plies, [0, 0.01] m; -1: one yarn thickness'),
     'ply_angles': ('0', 'deg', "in-plane angle of each ply about the ply's centre, comma-separated (one for all), "
@@ -188,6 +194,23 @@ if not (math.isfinite(p.backing_standoff) and 0 < p.backing_standoff <= 0.1):
     bad('backing_standoff', '(0, 0.1] m')
 if p.backing != 'none' and p.model == 'yade':
     bad('backing', "'none' with model yade")
+if p.frame not in ('none', 'mesh'):
+    bad('frame', "'none' or 'mesh'")
+if p.frame == 'mesh' and p.clamp != 0:
+    bad('clamp', '0 with frame mesh (the jaws hold the edges)')
+if p.frame == 'mesh' and p.model == 'yade':
+    bad('frame', "'none' with model yade")
+if p.frame == 'mesh':
+    if not (math.isfinite(p.frame_width) and 0 < p.frame_width <= 0.25 * p.side):
+        bad('frame_width', '(0, side/4 = %g] m' % (0.25 * p.side))
+    if not (math.isfinite(p.frame_edge) and 0 <= p.frame_edge <= min(1e-3, p.frame_width)):
+        bad('frame_edge', '[0, min(1e-3, frame_width) = %g] m' % min(1e-3, p.frame_width))
+    if not (math.isfinite(p.frame_gap) and 0 < p.frame_gap <= 1e-3):
+        bad('frame_gap', '(0, 1e-3] m')
+    if not (math.isfinite(p.frame_friction) and 0 <= p.frame_friction <= 2):
+        bad('frame_friction', '[0, 2]')
+    if p.response == 'penalty' and p.frame_friction > 0:
+        bad('frame_friction', "0 with response penalty (Coulomb friction acts in the impulse rows only)")
 if not (math.isfinite(p.standoff) and p.standoff > 0):
     bad('standoff', '(0, inf) m: the projectile starts clear of the ply')
 if not (math.isfinite(p.t_end) and 0 < p.t_end <= 0.01):
@@ -291,6 +314,13 @@ elif p.backing == 'facet':
         O.bodies[i].dynamic = False
     woven.coupling.couple(eng, plate)
     backing_id = plate[0]
+frame_ids = []
+if p.frame == 'mesh':
+    # The jaws of a test rig's clamping frame: the yarn ends are free (clamp=0) and held only where
+    # the jaws press them, so they pull in as far as the jaws' friction and the crimp let them.
+    frame_ids = woven.ballistic.add_frame(ply, p.frame_width, p.frame_gap, p.frame_friction, p.frame_edge)
+ends = np.array(sorted({n for y in range(eng.n_yarns) for n in (eng.yarn(y)['first_node'],
+                                                                eng.yarn(y)['first_node'] + eng.yarn(y)['n_nodes'] - 1)}))
 places0 = {}  # the crossings' places after the first step (they are made in it), for their slip (load_sharing)
 # How far it reaches below and above its centre of mass at the start (the nose, and the rear that
 # must pass the last ply): half the cube's edge or the sphere's radius in the scene as it was.
@@ -529,6 +559,13 @@ measured['max_iterations'] = contact_args['max_iterations']
 # Which yarns hold the energy at the end (principal against secondary, by family), how many carry
 # load, how far the crossings slipped (docs/ballistic.md, "Friction"; SI).
 measured['load_sharing'] = woven.ballistic.load_sharing(eng, X0, ply.centre, 0.5 * size, places0)
+if frame_ids:
+    # How far the yarn ends were drawn in along the ply (in plane) by the end: the frame's hold
+    pull = np.linalg.norm(woven.positions(eng)[ends, :2] - X0[ends, :2], axis=1)
+    measured['frame'] = {'kind': p.frame, 'width': p.frame_width, 'gap': p.frame_gap, 'edge': p.frame_edge, 'friction': p.frame_friction,
+                         'pull_in_max': float(pull.max()), 'pull_in_mean': float(pull.mean())}
+else:
+    measured['frame'] = {'kind': 'none'}
 measured['backing'] = {'kind': p.backing, 'standoff': p.backing_standoff if backing_id is not None else None,
                        'z': float(O.bodies[backing_id].state.pos[2]) if backing_id is not None else None}
 measured['projectile'] = {'shape': p.shape, 'mass': mass, 'size': size, 'yaw': p.yaw, 'obliquity': p.obliquity,

@@ -226,6 +226,40 @@ def add_projectile(ply, shape='box', mass=1.1e-3, size=5.59e-3, V=200.0, standof
     return b
 
 
+def add_frame(ply, width, gap=1e-6, friction=0.3, edge=5e-4, slab=1e-3, margin=1e-3):
+    """A clamping frame of two fixed jaws (YADE Facets of a closed square-ring mesh each, clumped, as
+    yade.ymport.stl gives a CAD part) over and under the ply's (the pack's) edges: the window leaves
+    `width` [m] of every edge between the jaws, which stand `gap` [m] clear of the highest and lowest
+    yarn sections, `slab` [m] thick, reaching `margin` [m] past the ply, the window's edge on the ply's
+    side rounded to radius `edge` [m] (the yarns drawn into the window bend over it). The jaws meet the yarns with
+    their own Coulomb coefficient `friction` ([0, 2]); the yarn ends are held by the jaws alone when
+    the ply is built with clamp = 0. Returns the two clump ids (upper, lower)."""
+    from . import mesh
+    side = float(np.ptp(ply.X0[:, 0]))
+    if not (math.isfinite(width) and 0 < width <= 0.25 * side):
+        raise ValueError('frame_width = %r is invalid: allowed (0, %g] m (a quarter of the ply side)' % (width, 0.25 * side))
+    if not (math.isfinite(gap) and 0 < gap <= 1e-3):
+        raise ValueError('frame_gap = %r is invalid: allowed (0, 1e-3] m' % (gap,))
+    if not (math.isfinite(edge) and 0 <= edge <= min(slab, width)):
+        raise ValueError('frame_edge = %r is invalid: allowed [0, %g] m (the jaw thickness and the frame width)'
+                         % (edge, min(slab, width)))
+    ab = arrays.section_semi_axes(ply.engine)
+    z_low = float(np.min(ply.X0[:, 2] - ab[:, 0]))  # below every section, whatever its turn
+    lo, hi = ply.X0[:, :2].min(axis=0), ply.X0[:, :2].max(axis=0)
+    centre, half = 0.5 * (lo + hi), 0.5 * float(np.max(hi - lo))
+    ids = []
+    for z0, z1, top, bottom in ((ply.z_top + gap, ply.z_top + gap + slab, 0, edge), (z_low - gap - slab, z_low - gap, edge, 0)):
+        v, t = mesh.square_ring(centre, half - width, half + margin, z0, z1, round_top=top, round_bottom=bottom)
+        facets = [utils.facet([tuple(map(float, v[k])) for k in tri], fixed=True) for tri in t]
+        for b in facets:  # YADE's clump asserts a positive mass of its members; the jaw is fixed
+            b.state.mass, b.state.inertia = 1.0 / len(facets), Vector3(1e-9, 1e-9, 1e-9)
+        cid = _O.bodies.appendClumped(facets)[0]
+        _O.bodies[cid].dynamic = False
+        ids.append(cid)
+    coupling.couple(ply.engine, ids, friction=friction)
+    return ids
+
+
 def crossing_places(engine):
     """The persistent crossings' places, {(yarn A, yarn B): (arc A, arc B)}: each sliding coordinate
     as rest length along its yarn from the yarn's first node [m] (a material coordinate: it moves only

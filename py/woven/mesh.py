@@ -141,6 +141,47 @@ def revolve(profile, segments):
     return np.array(verts), np.array(tris, dtype=np.int64)
 
 
+def square_ring(centre, inner_half, outer_half, z0, z1, round_top=0.0, round_bottom=0.0, segments=8):
+    """A closed, outward-oriented mesh of a square frame: the slab z0 < z < z1 between the squares of
+    half-sides `inner_half` < `outer_half` [m] about `centre` (x, y), its window open. The window's
+    top and bottom edges may be rounded to radii `round_top`, `round_bottom` [m] (`segments` facets
+    a quarter circle), so that a yarn drawn over the edge into the window bends over a curve as over
+    a test rig's rounded jaw, not over a right angle. The section profile is swept round the square
+    with mitred corners."""
+    if not (0 < inner_half < outer_half and z0 < z1):
+        raise ValueError('frame ring is invalid: allowed 0 < inner half-side < outer half-side and z0 < z1')
+    W, T = outer_half - inner_half, z1 - z0
+    if not (0 <= round_top and 0 <= round_bottom and round_top + round_bottom <= T and max(round_top, round_bottom) <= W):
+        raise ValueError('frame ring is invalid: allowed edge radii >= 0, together at most the slab thickness and each '
+                         'at most its width')
+    cx, cy = float(centre[0]), float(centre[1])
+    # The profile (u: outward from the window's edge, z), counter-clockwise in the (u, z) plane:
+    # window side bottom to top over the rounded edges, the top, the outer side, the bottom.
+    prof = []
+    for a in np.linspace(-0.5 * np.pi, -np.pi, segments + 1) if round_bottom > 0 else []:
+        prof.append((round_bottom * (1 + np.cos(a)), z0 + round_bottom * (1 + np.sin(a))))
+    if round_bottom == 0:
+        prof.append((0.0, z0))
+    for a in np.linspace(np.pi, 0.5 * np.pi, segments + 1) if round_top > 0 else []:
+        prof.append((round_top * (1 + np.cos(a)), z1 - round_top * (1 - np.sin(a))))
+    if round_top == 0:
+        prof.append((0.0, z1))
+    prof += [(W, z1), (W, z0)]
+    sq = [(-1, -1), (1, -1), (1, 1), (-1, 1)]  # counter-clockwise seen from above
+    n = len(prof)
+    v = np.array([(cx + (inner_half + u) * sx, cy + (inner_half + u) * sy, z) for sx, sy in sq for u, z in prof])
+    idx = lambda k, j: (k % 4) * n + (j % n)
+    t = []
+    for k in range(4):
+        for j in range(n):
+            a, b, c, d = idx(k, j), idx(k + 1, j), idx(k + 1, j + 1), idx(k, j + 1)
+            t += [(a, b, c), (a, c, d)]
+    t = np.array(t, dtype=np.int64)
+    if volume(v, t) < 0:
+        t = t[:, ::-1]
+    return v, t
+
+
 NOSE_AXES = ('+x', '-x', '+y', '-y', '+z', '-z')
 MAX_TRIANGLES = 200000
 
