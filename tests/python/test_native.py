@@ -73,9 +73,26 @@ SCENES = {
 }
 
 
+# YADE's other bodies: a mesh projectile (an STL, as woven.mesh reads it), a frame of clumped
+# Facets holding the edges, a Wall behind (the file is written by the test: RCC_MESH).
+RCC_MESH = 'rcc_mesh.stl'
+SCENES['ballistic_bodies'] = ('ballistic.py', ['side=0.006', 't_end=3e-6', 'vtk_every=-1', 'progress=0', 'samples=20',
+                                               'pictures=0', 'shape=mesh', 'mesh=' + RCC_MESH, 'mass=1e-3', 'V=300',
+                                               'clamp=0', 'frame=mesh', 'frame_width=1.5e-3', 'backing=wall',
+                                               'backing_standoff=1e-4'])
+
+
 @pytest.mark.parametrize('name', sorted(SCENES))
 def test_scene_same_bits_native_and_pyrunner(name, tmp_path):
-    script, args = SCENES[name]
+    if name == 'ballistic_bodies':
+        from woven import mesh
+        v, t = mesh.revolve([(0.0, -1.5e-3), (1.5e-3, -1.5e-3), (1.5e-3, 1.5e-3), (0.0, 1.5e-3)], 24)
+        path = str(tmp_path / RCC_MESH)
+        mesh.write_stl(path, v, t)
+        args = [a.replace(RCC_MESH, path) for a in SCENES[name][1]]
+        script = SCENES[name][0]
+    else:
+        script, args = SCENES[name]
     a, fa = _scene(script, tmp_path / 'native', args, native=True)
     b, fb = _scene(script, tmp_path / 'pyrunner', args, native=False)
     na, nb = _numbers(a['measured']), _numbers(b['measured'])
@@ -150,6 +167,50 @@ def test_save_load_continues_bit_for_bit(yade_ns, tmp_path, ext):
     assert O.iter == 60
     e2 = O.engines[-1].fabric
     assert type(O.engines[-1]).__name__ == 'WovenFabricEngine' and e2.iter == 60 and not e2._same(e)
+    O.run(120, True)
+    assert _fingerprint(O, e2, pid) == ref
+
+
+def test_save_load_keeps_facet_bodies(yade_ns, tmp_path):
+    """A clump of the 12 facets of a cube (a closed mesh, one-sided faces) strikes the ply over a
+    lone Facet sheet and a Wall, the sheet with its own friction: O.save / O.load continue bit for bit."""
+    O, utils, V3 = yade_ns.O, yade_ns.utils, yade_ns.Vector3
+    O.reset()
+    O.engines = [yade_ns.wrapper.ForceResetter(), yade_ns.wrapper.NewtonIntegrator(damping=0)]
+    w = woven.weave(nx=3, ny=3, cp_per_span=2)
+    e = w.engine
+    woven.contact.enable(e)
+    for y in range(e.n_yarns):
+        info = e.yarn(y)
+        e.fix(info['first_node'])
+        e.fix(info['first_node'] + info['n_nodes'] - 1)
+    X = woven.positions(e)
+    c, a = 0.5 * (X.min(axis=0) + X.max(axis=0)), 1.6e-3
+    v = np.array([[x, y, z] for x in (0, a) for y in (0, a) for z in (0, a)]) - a / 2 + c + [0, 0, X[:, 2].max() + a / 2 + 3e-4 - c[2]]
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    tris = [(q[0], q[1], q[2]) for q in quads] + [(q[0], q[2], q[3]) for q in quads]
+    facets = [utils.facet([tuple(map(float, v[i])) for i in tri], fixed=False) for tri in tris]
+    for b in facets:
+        b.state.mass, b.state.inertia = 1e-3 / 12, V3(1e-12, 1e-12, 1e-12)
+    pid = O.bodies.appendClumped(facets)[0]
+    O.bodies[pid].state.vel = V3(0, 0, -300)
+    lo, hi, z = X.min(axis=0) - 1e-3, X.max(axis=0) + 1e-3, X[:, 2].min() - 2e-4
+    k = [(lo[0], lo[1], z), (hi[0], lo[1], z), (hi[0], hi[1], z), (lo[0], hi[1], z)]
+    sheet = [O.bodies.append(utils.facet([k[0], k[1], k[2]], fixed=True)), O.bodies.append(utils.facet([k[0], k[2], k[3]], fixed=True))]
+    wall = O.bodies.append(utils.wall((0, 0, z - 2e-4), axis=2, sense=1))
+    woven.coupling.couple(e, [pid, wall])
+    woven.coupling.couple(e, sheet, friction=0.5)
+    assert [e.body(i)['friction'] for i in range(e.n_bodies)] == [-1, -1, 0.5, 0.5]
+    woven.attach(e)
+    O.run(60, True)
+    path = str(tmp_path / 'facets.yade.gz')
+    O.save(path)
+    O.run(120, True)
+    ref = _fingerprint(O, e, pid)
+    assert e.collision_stats()['contacts'] > 0
+    O.load(path)
+    e2 = O.engines[-1].fabric
+    assert [e2.body(i)['friction'] for i in range(e2.n_bodies)] == [-1, -1, 0.5, 0.5]
     O.run(120, True)
     assert _fingerprint(O, e2, pid) == ref
 
