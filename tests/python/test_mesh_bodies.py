@@ -291,3 +291,48 @@ def test_mesh_solid_frames():
     assert np.allclose(s['triangles'].reshape(-1, 3).mean(axis=0), 0, atol=1e-9)
     with pytest.raises(ValueError, match='nose_axis'):
         mesh.solid(path, nose_axis='x')
+
+
+def test_square_ring_is_a_closed_frame():
+    """woven.mesh.square_ring: closed and outward; its volume the slab's (2H)^2 - (2h)^2 times the
+    thickness exactly with square edges, less the rounded edge's (1 - pi/4) r^2 along the window's
+    perimeter (to the quarter circle's polygon) with a rounded one; bad sizes refused."""
+    H, h, T, r = 6e-3, 4e-3, 1e-3, 4e-4
+    v, t = mesh.square_ring((1e-3, -2e-3), h, H, 0.0, T)
+    mesh.check_closed(t)
+    assert mesh.volume(v, t) == pytest.approx(((2 * H) ** 2 - (2 * h) ** 2) * T, rel=1e-12)
+    for top, bottom in ((r, 0.0), (0.0, r)):
+        v, t = mesh.square_ring((0, 0), h, H, 0.0, T, round_top=top, round_bottom=bottom, segments=64)
+        mesh.check_closed(t)
+        # the rounded strip follows the window's perimeter 8 h (at the edge's centre line, 8 (h + r))
+        cut = (1 - math.pi / 4) * r * r * 8 * (h + r * (1 - 2 / (3 * (4 - math.pi))))
+        assert mesh.volume(v, t) == pytest.approx(((2 * H) ** 2 - (2 * h) ** 2) * T - cut, rel=2e-4)
+    with pytest.raises(ValueError, match='frame ring is invalid'):
+        mesh.square_ring((0, 0), H, h, 0.0, T)
+    with pytest.raises(ValueError, match='frame ring is invalid'):
+        mesh.square_ring((0, 0), h, H, 0.0, T, round_top=2 * T)
+
+
+def test_ballistic_frame_holds_by_its_friction(tmp_path):
+    """ballistic.py clamp=0 frame=mesh: the ply's edges between two fixed jaws; with the jaws' own
+    friction 2 the yarn ends are drawn in less than with frictionless jaws, the books close in both;
+    the keys are refused out of range, and with clamped ends, naming the key."""
+    from conftest import run_scene
+    pull = {}
+    for mu in (0, 2):
+        (tmp_path / str(mu)).mkdir()
+        rc, out, s = run_scene('ballistic.py', tmp_path / str(mu), 'side=0.008', 't_end=1.2e-5', 'V=200', 'clamp=0',
+                               'frame=mesh', 'frame_width=2e-3', 'frame_friction=%g' % mu, 'stop=0', 'progress=0',
+                               'vtk_every=-1', 'pictures=0', timeout=300)
+        m = s['measured']
+        assert m['frame']['kind'] == 'mesh' and m['frame']['friction'] == mu
+        assert abs(m['energy_balance_error']) < 0.01, out
+        pull[mu] = m['frame']['pull_in_mean']
+    assert 0 < pull[2] < 0.8 * pull[0], pull
+    for args, key in ((('frame=jaws', 'clamp=0'), 'frame'), (('frame=mesh',), 'clamp'),
+                      (('frame=mesh', 'clamp=0', 'frame_width=0.01'), 'frame_width'),
+                      (('frame=mesh', 'clamp=0', 'frame_width=2e-3', 'frame_friction=3'), 'frame_friction'),
+                      (('frame=mesh', 'clamp=0', 'frame_width=2e-3', 'frame_edge=3e-3'), 'frame_edge'),
+                      (('frame=mesh', 'clamp=0', 'frame_width=2e-3', 'frame_gap=0'), 'frame_gap')):
+        rc, out, _ = run_scene('ballistic.py', tmp_path, 'side=0.008', 't_end=1e-7', *args, timeout=120)
+        assert rc != 0 and ('%s = ' % key) in out and 'is invalid: allowed' in out, (args, out[-500:])
