@@ -82,6 +82,7 @@ defaults.update({
     'frame_width': (5e-3, 'm', 'frame mesh: how much of every edge the jaws cover, (0, side/4] m'),
     'frame_gap': (1e-6, 'm', 'frame mesh: clearance between each jaw and the nearest yarn sections, (0, 1e-3] m'),
     'frame_edge': (5e-4, 'm', 'frame mesh: radius of the jaws\' window edge on the ply\'s side, [0, min(1e-3, frame_width)] m (0: a right angle)'),
+    'frame_force': (0.0, 'N', 'frame mesh: load the upper jaw presses the edges with, [0, 1e6] N (0: both jaws fixed, pressing nothing)'),
     'frame_friction': (0.3, '', "frame mesh: Coulomb coefficient between the jaws and the yarns, [0, 2] (the projectile's is body_friction)"),
     'plies': (1, '', 'plies in the pack, [1, 40] (woven.pack: copies of the ply stacked below the first)'),
     'ply_gap': (-1.0, 'm', 'clear gap between neighbouring plies, [0, 0.01] m; -1: one yarn thickness'),
@@ -205,6 +206,8 @@ if p.frame == 'mesh':
         bad('frame_width', '(0, side/4 = %g] m' % (0.25 * p.side))
     if not (math.isfinite(p.frame_edge) and 0 <= p.frame_edge <= min(1e-3, p.frame_width)):
         bad('frame_edge', '[0, min(1e-3, frame_width) = %g] m' % min(1e-3, p.frame_width))
+    if not (math.isfinite(p.frame_force) and 0 <= p.frame_force <= 1e6):
+        bad('frame_force', '[0, 1e6] N (0: fixed jaws)')
     if not (math.isfinite(p.frame_gap) and 0 < p.frame_gap <= 1e-3):
         bad('frame_gap', '(0, 1e-3] m')
     if not (math.isfinite(p.frame_friction) and 0 <= p.frame_friction <= 2):
@@ -318,7 +321,8 @@ frame_ids = []
 if p.frame == 'mesh':
     # The jaws of a test rig's clamping frame: the yarn ends are free (clamp=0) and held only where
     # the jaws press them, so they pull in as far as the jaws' friction and the crimp let them.
-    frame_ids = woven.ballistic.add_frame(ply, p.frame_width, p.frame_gap, p.frame_friction, p.frame_edge)
+    frame_ids = woven.ballistic.add_frame(ply, p.frame_width, p.frame_gap, p.frame_friction, p.frame_edge, p.frame_force)
+    jaw0 = Vector3(O.bodies[frame_ids[0]].state.pos)
 ends = np.array(sorted({n for y in range(eng.n_yarns) for n in (eng.yarn(y)['first_node'],
                                                                 eng.yarn(y)['first_node'] + eng.yarn(y)['n_nodes'] - 1)}))
 places0 = {}  # the crossings' places after the first step (they are made in it), for their slip (load_sharing)
@@ -368,6 +372,15 @@ state = {'contact_seen': False, 'clear': 0, 'steady': 0, 'vz_ref': -p.V, 'outcom
 rows = []
 
 
+def frame_work():
+    """What a pressed jaw has put into the fabric [J]: its load's work over its drop less its kinetic
+    energy (its permanent force is YADE's, outside woven's books; 0 for fixed jaws)."""
+    if not (frame_ids and p.frame_force > 0):
+        return 0.0
+    st = O.bodies[frame_ids[0]].state
+    return p.frame_force * (jaw0[2] - st.pos[2]) - 0.5 * st.mass * st.vel.squaredNorm()
+
+
 def sample():
     E = eng.energy()
     s = eng.collision_stats()
@@ -379,7 +392,9 @@ def sample():
                contacts=s['contacts'], body_contacts=s['body_contacts'], broken=eng.broken_elements,
                projection=E['projection'], overlap=s['penetration'], body_overlap=s['body_penetration'],
                balance=(ke_p + E['kinetic'] + E['elastic'] + E['damped'] + dissipated + E['friction'] + E['released'] + E['spring']
-                        + E['projection'] - KE0 - E['initial'] - (E['work'] - E['body_work'])) / KE0)
+                        + E['projection'] - KE0 - E['initial'] - (E['work'] - E['body_work']) - frame_work()) / KE0)
+    if frame_ids and p.frame_force > 0:
+        row['frame_work'] = frame_work()
     rows.append(row)
     plot.addData(**row)
     finer = guard.check(row['balance'])
@@ -562,7 +577,9 @@ measured['load_sharing'] = woven.ballistic.load_sharing(eng, X0, ply.centre, 0.5
 if frame_ids:
     # How far the yarn ends were drawn in along the ply (in plane) by the end: the frame's hold
     pull = np.linalg.norm(woven.positions(eng)[ends, :2] - X0[ends, :2], axis=1)
+    jaw = O.bodies[frame_ids[0]].state.pos - jaw0
     measured['frame'] = {'kind': p.frame, 'width': p.frame_width, 'gap': p.frame_gap, 'edge': p.frame_edge, 'friction': p.frame_friction,
+                         'force': p.frame_force, 'jaw_drop': -float(jaw[2]), 'jaw_drift': float(math.hypot(jaw[0], jaw[1])),
                          'pull_in_max': float(pull.max()), 'pull_in_mean': float(pull.mean())}
 else:
     measured['frame'] = {'kind': 'none'}

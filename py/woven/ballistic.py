@@ -226,29 +226,43 @@ def add_projectile(ply, shape='box', mass=1.1e-3, size=5.59e-3, V=200.0, standof
     return b
 
 
-def add_frame(ply, width, gap=1e-6, friction=0.3, edge=5e-4, slab=1e-3, margin=1e-3):
+FRAME_KICK = 0.05  # [m/s] what a pressed jaw's load adds to its velocity in a critical step (add_frame)
+
+
+def add_frame(ply, width, gap=1e-6, friction=0.3, edge=5e-4, force=0.0, slab=1e-3, margin=1e-3):
     """A clamping frame of two fixed jaws (YADE Facets of a closed square-ring mesh each, clumped, as
     yade.ymport.stl gives a CAD part) over and under the ply's (the pack's) edges: the window leaves
     `width` [m] of every edge between the jaws, which stand `gap` [m] clear of the highest and lowest
     yarn sections, `slab` [m] thick, reaching `margin` [m] past the ply, the window's edge on the ply's
     side rounded to radius `edge` [m] (the yarns drawn into the window bend over it). The jaws meet the yarns with
     their own Coulomb coefficient `friction` ([0, 2]); the yarn ends are held by the jaws alone when
-    the ply is built with clamp = 0. Returns the two clump ids (upper, lower)."""
+    the ply is built with clamp = 0. `force` > 0 [N]: the upper jaw presses the edges with that load
+    (a YADE permanent force; it moves along z only), so the jaws' friction has a normal force to act
+    on; its mass is the one its load kicks by FRAME_KICK in the fabric's critical step, which the
+    contacts then take back each step (a lighter jaw, kicked by tens of m/s a step, went through
+    the yarns at 20 sweeps). 0: both jaws fixed, pressing nothing.
+    Returns the two clump ids (upper, lower)."""
     from . import mesh
     side = float(np.ptp(ply.X0[:, 0]))
     if not (math.isfinite(width) and 0 < width <= 0.25 * side):
         raise ValueError('frame_width = %r is invalid: allowed (0, %g] m (a quarter of the ply side)' % (width, 0.25 * side))
     if not (math.isfinite(gap) and 0 < gap <= 1e-3):
         raise ValueError('frame_gap = %r is invalid: allowed (0, 1e-3] m' % (gap,))
+    if not (math.isfinite(force) and 0 <= force <= 1e6):
+        raise ValueError('frame_force = %r is invalid: allowed [0, 1e6] N (0: fixed jaws)' % (force,))
     if not (math.isfinite(edge) and 0 <= edge <= min(slab, width)):
         raise ValueError('frame_edge = %r is invalid: allowed [0, %g] m (the jaw thickness and the frame width)'
                          % (edge, min(slab, width)))
-    ab = arrays.section_semi_axes(ply.engine)
-    z_low = float(np.min(ply.X0[:, 2] - ab[:, 0]))  # below every section, whatever its turn
+    # Each section's reach along z: the ellipse's support sqrt(a^2 u_z^2 + b^2 d_z^2), d its minor axis,
+    # u_z^2 at most 1 - d_z^2 (the jaws touch the flat ply's sections, not its Ply.z_top, which
+    # allows every section its major semi-axis).
+    ab, d = arrays.section_semi_axes(ply.engine), arrays.section_dirs(ply.engine)
+    reach = np.sqrt(ab[:, 0] ** 2 * np.clip(1 - d[:, 2] ** 2, 0, 1) + ab[:, 1] ** 2 * d[:, 2] ** 2)
+    z_low, z_high = float(np.min(ply.X0[:, 2] - reach)), float(np.max(ply.X0[:, 2] + reach))
     lo, hi = ply.X0[:, :2].min(axis=0), ply.X0[:, :2].max(axis=0)
     centre, half = 0.5 * (lo + hi), 0.5 * float(np.max(hi - lo))
     ids = []
-    for z0, z1, top, bottom in ((ply.z_top + gap, ply.z_top + gap + slab, 0, edge), (z_low - gap - slab, z_low - gap, edge, 0)):
+    for z0, z1, top, bottom in ((z_high + gap, z_high + gap + slab, 0, edge), (z_low - gap - slab, z_low - gap, edge, 0)):
         v, t = mesh.square_ring(centre, half - width, half + margin, z0, z1, round_top=top, round_bottom=bottom)
         facets = [utils.facet([tuple(map(float, v[k])) for k in tri], fixed=True) for tri in t]
         for b in facets:  # YADE's clump asserts a positive mass of its members; the jaw is fixed
@@ -256,6 +270,16 @@ def add_frame(ply, width, gap=1e-6, friction=0.3, edge=5e-4, slab=1e-3, margin=1
         cid = _O.bodies.appendClumped(facets)[0]
         _O.bodies[cid].dynamic = False
         ids.append(cid)
+    if force > 0:
+        up = _O.bodies[ids[0]]
+        up.dynamic = True
+        up.state.mass = force * ply.engine.dt_crit / FRAME_KICK
+        # Along z only: YADE keeps the other velocity components, woven's impulses find no rotation
+        # (an inertia far above the mass's times the jaw's size squared) and the symmetric frame none
+        # in the plane to speak of (measured.frame's drift).
+        up.state.inertia = Vector3(1e6, 1e6, 1e6)
+        up.state.blockedDOFs = 'xyXYZ'
+        _O.forces.setPermF(ids[0], Vector3(0, 0, -force))
     coupling.couple(ply.engine, ids, friction=friction)
     return ids
 
