@@ -36,15 +36,19 @@ void CollisionStage::measureBodies(const Fabric& f, Real dt) {
   // The position projection may move a node by this much after the drift (toward the body, pushed
   // by its other contacts): such contacts are listed too, as the CP pairs are (narrow).
   const Real projected = projectionReach(dt);
+  const auto heldAt = [&](const BodyCandidate& pc, int end) -> const BodyContact* {
+    const std::uint64_t key = bodyKey(pc.cp, pc.body, pc.part, end);
+    const auto it = std::lower_bound(heldKeys_.begin(), heldKeys_.end(), std::make_pair(key, std::size_t(0)));
+    return it != heldKeys_.end() && it->first == key ? &heldBody_[it->second] : nullptr;
+  };
   for (const BodyCandidate& pc : bodyPairs_) {
-    const BodyContact* held = nullptr;
-    if (gapModel) {
-      const auto it = std::lower_bound(heldKeys_.begin(), heldKeys_.end(),
-                                       std::make_pair(bodyKey(pc.cp, pc.body, pc.part, -1), std::size_t(0)));
-      if (it != heldKeys_.end() && it->first == bodyKey(pc.cp, pc.body, pc.part, -1)) held = &heldBody_[it->second];
-    }
+    const BodyContact* held = gapModel ? heldAt(pc, -1) : nullptr;
+    // A triangle's face contacts at the end nodes hold their memories apart (the two sections differ).
+    const BodyContact* ends[2] = {nullptr, nullptr};
+    const bool triangle = gapModel && bodies[pc.body].parts[pc.part].type == RigidPart::Type::Triangle;
+    if (triangle) ends[0] = heldAt(pc, 0), ends[1] = heldAt(pc, 1);
     const int m = gapModel ? bodyGap(f, pc.cp, bodies[pc.body], pc.part, dt, params_.margin + projected, params_.rule, c,
-                                     &tangent_, held)
+                                     &tangent_, held, triangle ? ends : nullptr)
                            : cpBodyContact(f, bounds_[pc.cp], pc.cp, bodies[pc.body], pc.part, dt, params_.margin,
                                            params_.rule, c[0]);
     for (int q = 0; q < m; ++q) {

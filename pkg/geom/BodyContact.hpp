@@ -42,7 +42,9 @@ struct BodyContact {
   /// flattening passes must take it before the gap can grow.
   Real held = 0;
   /// Sphere form: -1, the contact is at the centre's place along the CP; 0 or 1, at that end node
-  /// (the section there, as a circle of its half-thickness: GapFunction.cpp, bodyGap).
+  /// (the section there, as a circle of its half-thickness: GapFunction.cpp, bodyGap). Triangle
+  /// form: 0 or 1, the end node over the face; -1, the edge or corner contact. Part of the key its
+  /// memory is found by at the next step.
   std::int8_t end = -1;
 };
 

@@ -504,7 +504,7 @@ int cylinderGap(const Fabric& f, Index cp, const RigidBody& body, int part, Sect
 // for the step: dg/dx_k = -w_k n, w = (1 - s, s), the rows of the sphere form.
 template <class Listed>
 int triangleGap(const Fabric& f, Index cp, const RigidBody& body, int part, SectionRule rule, BodyContact c,
-                BodyContact out[2], const BodyContact* held, const Listed& listed) {
+                BodyContact out[2], const BodyContact* held, const BodyContact* const* heldEnds, const Listed& listed) {
   const Index i = f.elem0[cp];
   const RigidPart& q = body.parts[part];
   const Vec3 a = body.partVertex(part, 0), b = body.partVertex(part, 1), v2 = body.partVertex(part, 2);
@@ -512,23 +512,28 @@ int triangleGap(const Fabric& f, Index cp, const RigidBody& body, int part, Sect
   const Mat3 axes = body.partAxes(part);
   const Vec3 x[2] = {f.pos[i], f.pos[i + 1]};
   const Real height[2] = {(x[0] - a).dot(outward), (x[1] - a).dot(outward)};
-  // The side the CP is on: above the face (+1: pushed along the outward normal) or below.
+  // The side the CP is on: above the face (+1: pushed along the outward normal) or below, as any of
+  // its contacts with the facet held it at the last step.
+  const BodyContact* anyHeld = held ? held : heldEnds && heldEnds[0] ? heldEnds[0] : heldEnds ? heldEnds[1] : nullptr;
   Real side = 1;
   if (q.twoSided)
-    side = held ? -(axes * held->localNormal).dot(outward) : (std::abs(height[0]) >= std::abs(height[1]) ? height[0] : height[1]);
+    side = anyHeld ? -(axes * anyHeld->localNormal).dot(outward)
+                   : (std::abs(height[0]) >= std::abs(height[1]) ? height[0] : height[1]);
   const Vec3 faceNormal = side >= 0 ? Vec3(-outward) : outward;  // from the CP towards the triangle
   int count = 0;
-  const auto emit = [&](Real s, const Vec3& n) {
+  // end: the end node a face contact stands at (its own memory), -1 the edge contact
+  const auto emit = [&](Real s, const Vec3& n, int end) {
     if (count == 2) return;
+    const BodyContact* memory = end < 0 ? held : heldEnds ? heldEnds[end] : nullptr;
     const Vec3 local = axes.transpose() * n;
     const SectionAt sec = sectionAt(f, cp, s, rule);
     const Real room = triangleMinAlong(a, b, v2, n) - sec.centre.dot(n);
     const Real full = ellipseSupport(sec.u, sec.d, sec.a, sec.b, n);
     // The measure memory (capMeasure's rule): the section may reach into room the triangle leaves,
     // beyond its support at the last step along the same normal (new: its half-thickness).
-    const bool sameFace = held && held->localNormal.dot(local) > 0.999;
-    const Real support = std::min(full, std::max(sameFace ? held->support[0] : sec.b, room));
-    c.s = s, c.normal = n, c.localNormal = local;
+    const bool sameFace = memory && memory->localNormal.dot(local) > 0.999;
+    const Real support = std::min(full, std::max(sameFace ? memory->support[0] : sec.b, room));
+    c.s = s, c.normal = n, c.localNormal = local, c.end = static_cast<std::int8_t>(end);
     c.support[0] = support, c.support[1] = 0, c.held = full - support;
     c.gap = room - support;
     c.point = sec.centre + support * n;
@@ -541,24 +546,24 @@ int triangleGap(const Fabric& f, Index cp, const RigidBody& body, int part, Sect
     if (onFace[k] && below > semiAxes(f.secRadius[i + k], f.secFlat[i + k], rule).a) onFace[k] = false;  // the far side
   }
   for (int k = 0; k < 2; ++k)
-    if (onFace[k]) emit(k, faceNormal);
+    if (onFace[k]) emit(k, faceNormal, k);
   if (onFace[0] && onFace[1]) return count;  // the whole axis over the face: its ends are the closest
   const SegmentTriangleClosest sc = closestSegmentTriangle(x[0], x[1], a, b, v2);
   if (sc.feature == TriangleFeature::Face && sc.distance > kTinyDistance) return count;  // at an end over the face
   if (!(sc.distance > kTinyDistance)) {
     // The axis through the triangle away from its ends over the face: pushed back along the face
     // normal from the crossing.
-    if (!onFace[0] && !onFace[1]) emit(sc.s, faceNormal);
+    if (!onFace[0] && !onFace[1]) emit(sc.s, faceNormal, -1);
     return count;
   }
-  emit(sc.s, (sc.onTriangle - sc.onSegment) / sc.distance);
+  emit(sc.s, (sc.onTriangle - sc.onSegment) / sc.distance, -1);
   return count;
 }
 
 }  // namespace
 
 int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
-            BodyContact out[2], const Vec3Array* tangent, const BodyContact* held) {
+            BodyContact out[2], const Vec3Array* tangent, const BodyContact* held, const BodyContact* const* heldEnds) {
   const Index i = f.elem0[cp];
   // Listed when it can touch within the step: a speculative contact (Box2D), whose row lets the pair
   // close exactly its gap. The approach is bounded by the speeds, not by the normal velocity now: a
@@ -628,7 +633,7 @@ int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt,
                        std::max(semiAxes(f.secRadius[i], f.secFlat[i], rule).a, semiAxes(f.secRadius[i + 1], f.secFlat[i + 1], rule).a);
     const Real bodySpeed = body.vel.norm() + body.angVel.norm() * ((centre - body.pos).norm() + ball);
     if (apart > margin + (bodySpeed + nodeSpeed) * dt) return 0;
-    return triangleGap(f, cp, body, part, rule, c, out, held, listed);
+    return triangleGap(f, cp, body, part, rule, c, out, held, heldEnds, listed);
   }
   // The face of the box that leaves the CP the most room (the separating-axis choice among the
   // box's faces), then one contact per end section: a level CP under a face is held at both ends.

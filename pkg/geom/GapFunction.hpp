@@ -158,9 +158,12 @@ void remeasure(const Fabric& f, CPContact& c, SectionRule rule, bool sections, c
 /// fastest node): a speculative contact, whose row lets the pair close exactly its gap.
 /// `held` (may be null) is the same CP and part's contact of the last step: the sections' measure
 /// may grow only into room (capMeasure's rule; without one, the half-thickness is the reference).
-/// Returns the count.
+/// A triangle's contacts at an end node over its face (BodyContact::end 0 or 1) each keep their own
+/// memory: `heldEnds` (may be null, or either entry) the last step's at end 0 and 1, `held` its
+/// edge contact's. Returns the count.
 int bodyGap(const Fabric& f, Index cp, const RigidBody& body, int part, Real dt, Real margin, SectionRule rule,
-            BodyContact out[2], const Vec3Array* tangent = nullptr, const BodyContact* held = nullptr);
+            BodyContact out[2], const Vec3Array* tangent = nullptr, const BodyContact* held = nullptr,
+            const BodyContact* const* heldEnds = nullptr);
 
 /// Measures body contact c again at the current positions and pose (its normal held for a box, its
 /// section frame held for a sphere): g(x, body pose). Sets gap, point, s and normal (sphere).
