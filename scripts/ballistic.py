@@ -68,7 +68,7 @@ defaults.update({
     # Measured on the default scene over 20 us (docs/ballistic.md): absorbed energy within 0.2 % of
     # the tension scene's contact settings (4 passes, 50 sweeps, 5 um skin), at 0.6x the wall time.
     'flatten_passes': (1, '', CONTACT_KEYS['flatten_passes'][2]),
-    'max_iterations': (woven.pack.PLY_SWEEPS, '', CONTACT_KEYS['max_iterations'][2] + '; a pack takes 10 per ply (at least this many) unless given'),
+    'max_iterations': (woven.pack.PLY_SWEEPS, '', CONTACT_KEYS['max_iterations'][2] + '; a pack takes 10 per ply (at least this many), a backing or a frame 200, unless given'),
     'skin': (4e-5, 'm', CONTACT_KEYS['skin'][2]),
     # Same pairs as the tree; 100 us of the default scene in 69 s against 84 s (bench_ballistic.py).
     'broad_phase': ('grid', '', CONTACT_KEYS['broad_phase'][2]),
@@ -195,6 +195,7 @@ if not (math.isfinite(p.backing_standoff) and 0 < p.backing_standoff <= 0.1):
     bad('backing_standoff', '(0, 0.1] m')
 if p.backing != 'none' and p.model == 'yade':
     bad('backing', "'none' with model yade")
+PINCH_SWEEPS = 200  # sweeps with a backing or a frame, unless max_iterations is given
 if p.frame not in ('none', 'mesh'):
     bad('frame', "'none' or 'mesh'")
 if p.frame == 'mesh' and p.clamp != 0:
@@ -288,6 +289,11 @@ if p.plies > 1 and 'max_iterations' not in p.given:
     # sweeps let the projectile 0.48 thickness into the yarns and the projection put in 6 % of KE0),
     # and never fewer than the single ply's.
     contact_args['max_iterations'] = woven.pack.sweeps_for(p.plies, at_least=p.max_iterations)
+if (p.frame != 'none' or p.backing != 'none') and 'max_iterations' not in p.given:
+    # Yarns pinched between two rigid bodies (the cube and a backing, a frame's jaws): Gauss-Seidel
+    # carries the push through them slowly, and 20 sweeps left them crushed into each other (up to
+    # 1.05 thickness against a wall, 0.35-0.48 in a frame); 200 held them to 0.02-0.07.
+    contact_args['max_iterations'] = max(contact_args['max_iterations'], PINCH_SWEEPS)
 ply = woven.ballistic.build_ply(weave_args, contact_args, side=p.side,
                                 clamp=p.clamp, state=p.state,
                                 breakage=dict(strain=p.break_strain, filter_length=p.break_filter,
