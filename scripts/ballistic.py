@@ -82,7 +82,8 @@ defaults.update({
     'frame_width': (5e-3, 'm', 'frame mesh: how much of every edge the jaws cover, (0, side/4] m'),
     'frame_gap': (1e-6, 'm', 'frame mesh: clearance between each jaw and the nearest yarn sections, (0, 1e-3] m'),
     'frame_edge': (5e-4, 'm', 'frame mesh: radius of the jaws\' window edge on the ply\'s side, [0, min(1e-3, frame_width)] m (0: a right angle)'),
-    'frame_force': (0.0, 'N', 'frame mesh: load the upper jaw presses the edges with, [0, 1e6] N (0: both jaws fixed, pressing nothing)'),
+    'frame_force': (0.0, 'N', 'frame mesh: load the upper jaw presses the edges with, [0, 1e6] N (0: both jaws fixed; a pressed '
+                    'jaw is not validated, docs/ballistic.md "Frames")'),
     'frame_friction': (0.3, '', "frame mesh: Coulomb coefficient between the jaws and the yarns, [0, 2] (the projectile's is body_friction)"),
     'plies': (1, '', 'plies in the pack, [1, 40] (woven.pack: copies of the ply stacked below the first)'),
     'ply_gap': (-1.0, 'm', 'clear gap between neighbouring plies, [0, 0.01] m; -1: one yarn thickness'),
