@@ -72,7 +72,9 @@ std::string CollisionStage::memory() const {
   o.put(static_cast<std::int64_t>(cacheClock_));
   o.sized(sectionStamp_);
   o.put(static_cast<std::uint64_t>(bodies.size()));
-  o.sized(bodyContacts_);  // the next step's measure memory
+  // The next step's measure memory: none when new settings have just invalidated it (setParams), as
+  // the running engine's next step will find none; a restored engine must not find these.
+  o.sized(forgetHeld_ ? std::vector<BodyContact>() : bodyContacts_);
   // Without them a continued run's first host kick would be the body's whole velocity change since
   // the bodies were coupled, and the books (body work, contact, work) would part from the straight run.
   for (const RigidBody& b : bodies) o.put(b.vel), o.put(b.angVel);

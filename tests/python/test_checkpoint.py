@@ -248,3 +248,40 @@ def test_continued_run_keeps_every_energy_book(tmp_path, breakage, bodies):
     for (k, x), (_, y) in zip(straight[0], continued[0]):
         assert x == y, 'book %s: straight %r, continued %r' % (k, x, y)
     assert straight == continued
+
+
+def test_snapshot_after_new_contact_settings_continues(yade_ns):
+    """New contact settings between steps (woven.contact.enable again, or a native stage attribute set
+    from YADE) drop the collision stage's memories; a snapshot taken then carries none of them, so
+    the restored engine steps on as the one that took it, bit for bit (it carried the body contacts'
+    measure memory, which the running engine had dropped)."""
+    import woven
+    from woven import _woven
+    from yade import utils, Vector3
+    O = yade_ns.O
+    for change in (False, True):
+        O.reset()
+        w = woven.weave(nx=3, ny=3, cp_per_span=2)
+        e = w.engine
+        woven.contact.enable(e)
+        for y in range(e.n_yarns):
+            info = e.yarn(y)
+            e.fix(info['first_node'])
+            e.fix(info['first_node'] + info['n_nodes'] - 1)
+        X = woven.positions(e)
+        c, half = 0.5 * (X.min(axis=0) + X.max(axis=0)), 0.8e-3
+        pid = O.bodies.append(utils.box(Vector3(c[0], c[1], X[:, 2].max() + half + 0.3e-3), Vector3(half, half, half)))
+        O.bodies[pid].state.vel = Vector3(0, 0, -300)
+        woven.coupling.couple(e, [pid])
+        dt = 0.7 * e.dt_crit
+        for _ in range(60):
+            e.step(dt)
+        assert e.collision_stats()['body_contacts'] > 0  # the box is in the ply: memories to drop
+        if change:
+            woven.contact.enable(e, friction=0.3)
+        e2 = _woven._engine_from_snapshot(e._snapshot())
+        for _ in range(120):
+            e.step(dt), e2.step(dt)
+        assert woven.positions(e).tobytes() == woven.positions(e2).tobytes(), change
+        assert sorted(e.energy().items()) == sorted(e2.energy().items())
+    O.reset()

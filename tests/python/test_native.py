@@ -78,7 +78,7 @@ SCENES = {
 RCC_MESH = 'rcc_mesh.stl'
 SCENES['ballistic_bodies'] = ('ballistic.py', ['side=0.006', 't_end=3e-6', 'vtk_every=-1', 'progress=0', 'samples=20',
                                                'pictures=0', 'shape=mesh', 'mesh=' + RCC_MESH, 'mass=1e-3', 'V=300',
-                                               'clamp=0', 'frame=mesh', 'frame_width=1.5e-3', 'backing=wall',
+                                               'clamp=0', 'frame=mesh', 'frame_width=1.2e-3', 'backing=wall',
                                                'backing_standoff=1e-4'])
 
 
@@ -86,7 +86,8 @@ SCENES['ballistic_bodies'] = ('ballistic.py', ['side=0.006', 't_end=3e-6', 'vtk_
 def test_scene_same_bits_native_and_pyrunner(name, tmp_path):
     if name == 'ballistic_bodies':
         from woven import mesh
-        v, t = mesh.revolve([(0.0, -1.5e-3), (1.5e-3, -1.5e-3), (1.5e-3, 1.5e-3), (0.0, 1.5e-3)], 24)
+        # 2 mm across: clear of the frame's 3.6 mm window
+        v, t = mesh.revolve([(0.0, -1e-3), (1e-3, -1e-3), (1e-3, 1e-3), (0.0, 1e-3)], 24)
         path = str(tmp_path / RCC_MESH)
         mesh.write_stl(path, v, t)
         args = [a.replace(RCC_MESH, path) for a in SCENES[name][1]]
