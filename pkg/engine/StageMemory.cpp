@@ -80,7 +80,11 @@ std::string CollisionStage::memory() const {
   for (const RigidBody& b : bodies) o.put(b.vel), o.put(b.angVel);
   o.sized(restFlat_);
   o.sized(restDir_);
-  o.sized(std::vector<CollisionStats>{stats});
+  // The statistics continue in a restored engine, its phase clocks from zero: wall-clock times are
+  // no state, and would make two saves of one run differ in their bytes.
+  CollisionStats counted = stats;
+  std::fill(std::begin(counted.seconds), std::end(counted.seconds), Real(0));
+  o.sized(std::vector<CollisionStats>{counted});
   return o.b;
 }
 
