@@ -45,6 +45,9 @@ struct CollisionStats {
   long cached = 0;            ///< of which carried from an earlier step (ContactParams::cacheDistance)
   long flattened = 0;         ///< contacts whose overlap was (partly) taken up by flattening
   int flattenPasses = 0;      ///< passes made
+  // Explicit where the compiler would pad: the statistics are saved raw with the collision memory,
+  // and padding left uninitialised made two saves of one run differ in their bytes.
+  std::int32_t padding0_ = 0;
   ImpulseReport impulses;     ///< the impulse solve
   NormalForceReport forces;   ///< the penalty / section-spring forces (response penalty, flattening springs)
   Real springEnergy = 0;      ///< energy held in those springs at x_n [J] (1/2 k_p delta^2 + 1/2 k_s (r0 eps)^2)
@@ -58,6 +61,7 @@ struct CollisionStats {
   long bodyContacts = 0;      ///< CP-body contacts (static + moving)
   Real bodyPenetration = 0;   ///< largest CP-body overlap at the start of the step [m]
   Index deepestBodyCP = -1;   ///< the CP of that contact (-1: none)
+  std::int32_t padding1_ = 0;  // (see padding0_)
   // since the start
   long steps = 0;
   long broadPhases = 0;       ///< broad phases run (the other steps reused the pairs: Verlet skin)
