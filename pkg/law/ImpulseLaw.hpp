@@ -58,6 +58,7 @@ static_assert(kMaxStencil <= kMaxRowNodes, "a row holds every node of its contac
 struct ImpulseReport {
   long rows = 0;            ///< contacts that received impulses
   int iterations = 0;       ///< Gauss-Seidel sweeps made
+  std::int32_t padding_ = 0;  // explicit: saved raw with the collision statistics (CollisionStats)
   Real residual = 0;        ///< largest miss of a row's target after the last sweep [m/s]
   long unresolved = 0;      ///< rows still missing their target by more than the solve's tolerance (ContactParams::solverTolerance)
   long skipped = 0;         ///< row updates the sweeps skipped (nothing had changed them: the active set)

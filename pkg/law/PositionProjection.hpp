@@ -37,6 +37,7 @@ namespace woven {
 
 struct ProjectionReport {
   int sweeps = 0;         ///< sweeps made
+  std::int32_t padding_ = 0;  // explicit: saved raw with the collision statistics (CollisionStats)
   long pushed = 0;        ///< contact moves made (over all sweeps)
   Real energy = 0;        ///< energy the moves put in [J] (< 0: taken out): springs and the step's kinetic energy
   Real overlapLeft = 0;   ///< largest overlap beyond allowance + slop met in the last sweep made [m] (0: none)
