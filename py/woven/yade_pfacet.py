@@ -19,14 +19,18 @@ Mapping (docs/yade_grid.md, "PFacet ribbons", has the measured figures):
   nodes and connections).
 - axial bonds: a line's bond gets kn = E*A/(lines*L) (L its node distance), so at every gap the lines
   together have woven's E*A/L (measured by a static pull in tests/python/test_yade_pfacet.py). The
-  across bonds get the stiffness of the line bond beside them, E*A/(lines*L_station) (L_station the
-  mean of the station's two line gaps): they hold the width as stiffly as a line holds its length,
-  and add no more than the line bonds to the time step's Gershgorin sum. The diagonals get kn = 0:
-  at an angle to the axis any stiffness there would add k_d*cos^2 to the axial stiffness; a ribbon of
-  parallel fibres has no in-plane shear stiffness to speak of, so the quad is left free to shear.
-  Bending, shear and twist springs of every bond are zeroed (woven's yarns have none). Bonds are set
-  on the interactions after gridpfacet.gridConnection (which would give young*pi*r^2/L); YADE's bonds
-  also push, woven's yarns are tension-only.
+  across bonds get, normal and shear, the stiffness of the line bonds beside them,
+  E*A/(lines*L_station) (L_station: the mean of the station's line gaps): they hold the station's
+  nodes together in every direction about as stiffly as a line holds its length, so a ribbon's
+  section stays whole as woven's (one node a station) does, and they add no more than the line bonds
+  to the time step's Gershgorin sum. Without their shear spring the lines move apart out of plane
+  freely (the quad folds about its diagonal): a sphere pressing on a ribbon's edge twisted it and
+  met its inside at once, 60 um deeper in one step. The nodes do not turn (blocked rotations, as
+  woven's nodes): a turning node would undo that shear. The diagonals get kn = 0: at an angle to the
+  axis any stiffness there adds k_d*cos^2 to the axial stiffness; they only close the PFacets.
+  Bending and twist springs are zeroed (woven's yarns have none), and the line bonds' shear. Bonds
+  are set on the interactions after gridpfacet.gridConnection (which gives young*pi*r^2/L); YADE's
+  bonds also push, woven's yarns are tension-only.
 - masses: a line carries rho*A/lines per length of woven yarn; half of the woven length each chord
   stands for (yade_grid's material length) goes to each of its two nodes, so the total is woven's to
   rounding (b.state.mass set after gridpfacet's own volume lumping).
@@ -44,11 +48,16 @@ Mapping (docs/yade_grid.md, "PFacet ribbons", has the measured figures):
   nodes, node-PFacet through Ig2_Sphere_PFacet_ScGridCoGeom, and to its connections,
   Ig2_GridConnection_GridConnection_GridCoGridCoGeom); FrictPhys from FrictMat, YADE's
   kn = 2*E1*r1*E2*r2/(E1*r1 + E2*r2) = young*r for equal radii and moduli, so nodes, connections and
-  PFacets all get the contact young = kn/r. A sphere projectile meets the PFacets
-  (Ig2_Sphere_PFacet_ScGridCoGeom); YADE 2023.02a has no Box-PFacet functor, so a box meets only the
-  nodes, as spheres of radius r through Ig2_Box_Sphere_ScGeom (as in the grid baseline).
-  projectile_material() picks the young that gives kn. Masks as in yade_grid: a ribbon's PFacets
-  never meet those of its own family.
+  PFacets all get the contact young = kn/r. Masks as in yade_grid: a ribbon's PFacets never meet
+  those of its own family.
+- projectile: YADE 2023.02a has no Box-PFacet functor, so a box meets only the nodes, as spheres of
+  radius r (Ig2_Box_Sphere_ScGeom, as in the grid baseline). A sphere meets the PFacets
+  (Ig2_Sphere_PFacet_ScGridCoGeom, mask CONNECTION_MASK) or the nodes (Ig2_Sphere_Sphere_ScGeom, mask
+  BOX_MASK): the PFacet functor picks the edge it measures from the barycentric signs of the sphere
+  centre's projection, which for a sphere millimetres across lands far off these sub-millimetre,
+  crimp-tilted triangles; the depth then jumped between edges (18 to 76 um in one step) and flung a
+  node at 5-6 times the impact speed at any time step. projectile_material() picks the young that
+  gives kn.
 SI units throughout.
 """
 import math
@@ -59,7 +68,8 @@ from yade._minieigenHP import Vector3
 from yade.wrapper import (CohFrictMat, FrictMat, ForceResetter, InsertionSortCollider, Bo1_PFacet_Aabb,
                           Bo1_Sphere_Aabb, Bo1_Box_Aabb, InteractionLoop, Ig2_GridNode_GridNode_GridNodeGeom6D,
                           Ig2_GridConnection_GridConnection_GridCoGridCoGeom, Ig2_Sphere_PFacet_ScGridCoGeom,
-                          Ig2_PFacet_PFacet_ScGeom, Ig2_Box_Sphere_ScGeom, Ip2_CohFrictMat_CohFrictMat_CohFrictPhys,
+                          Ig2_PFacet_PFacet_ScGeom, Ig2_Box_Sphere_ScGeom, Ig2_Sphere_Sphere_ScGeom,
+                          Ip2_CohFrictMat_CohFrictMat_CohFrictPhys,
                           Ip2_FrictMat_FrictMat_FrictPhys, Law2_ScGeom6D_CohFrictPhys_CohesionMoment,
                           Law2_GridCoGridCoGeom_FrictPhys_CundallStrack, Law2_ScGridCoGeom_FrictPhys_CundallStrack,
                           Law2_ScGeom_FrictPhys_CundallStrack, NewtonIntegrator, GridCoGridCoGeom, ScGridCoGeom,
@@ -85,8 +95,10 @@ def engines(damping=0.0):
                               avoidSelfInteractionMask=2 | 4 | 8, label='pfacetCollider'),
         InteractionLoop(
             [Ig2_GridNode_GridNode_GridNodeGeom6D(), Ig2_PFacet_PFacet_ScGeom(), Ig2_Sphere_PFacet_ScGridCoGeom(),
-             Ig2_GridConnection_GridConnection_GridCoGridCoGeom(), Ig2_Box_Sphere_ScGeom()],
-            [Ip2_CohFrictMat_CohFrictMat_CohFrictPhys(setCohesionNow=True, setCohesionOnNewContacts=False),
+             Ig2_GridConnection_GridConnection_GridCoGridCoGeom(), Ig2_Box_Sphere_ScGeom(), Ig2_Sphere_Sphere_ScGeom()],
+            # no cohesion from the materials: build() sets each bond's own (setCohesionNow would reset
+            # them all to the nodes' material at the first step)
+            [Ip2_CohFrictMat_CohFrictMat_CohFrictPhys(setCohesionNow=False, setCohesionOnNewContacts=False),
              Ip2_FrictMat_FrictMat_FrictPhys()],
             [Law2_ScGeom6D_CohFrictPhys_CohesionMoment(), Law2_ScGridCoGeom_FrictPhys_CundallStrack(),
              Law2_GridCoGridCoGeom_FrictPhys_CundallStrack(), Law2_ScGeom_FrictPhys_CundallStrack()],
@@ -379,16 +391,19 @@ def build(engine, yarns, lines=2, kn=0.0, radius=0.0, failure_strain=0.0, fricti
     p.EA = [info['E'] * info['area'] for info in infos]
     p.stations = []
 
-    def bond(i1, i2, k, adhesion, mask):
-        """A GridConnection i1-i2 and its bond of stiffness k [N/m], breaking past `adhesion` [N]."""
+    def bond(i1, i2, k, adhesion, mask, ks=0.0):
+        """A GridConnection i1-i2 and its bond: normal stiffness k [N/m], shear stiffness ks [N/m]
+        (relative displacement across the bond; the nodes do not turn), breaking past `adhesion` [N]."""
         cid = _O.bodies.append(gridConnection(i1, i2, r, material=p.contact_material, mask=mask))
         it = _O.interactions[i1, i2]
-        it.phys.kn = k
-        it.phys.ks = it.phys.kr = it.phys.ktw = 0.0
+        it.phys.kn, it.phys.ks = k, ks
+        it.phys.kr = it.phys.ktw = 0.0
+        it.phys.cohesionBroken, it.phys.fragile, it.phys.initCohesion = False, True, False
         it.phys.normalAdhesion = adhesion
         it.phys.shearAdhesion = _NEVER
-        p.bond_sum[i1] = p.bond_sum.get(i1, 0.0) + k
-        p.bond_sum[i2] = p.bond_sum.get(i2, 0.0) + k
+        # Gershgorin: the bond's stiffness matrix kn n n^T + ks (1 - n n^T) has spectral radius max(kn, ks)
+        p.bond_sum[i1] = p.bond_sum.get(i1, 0.0) + max(k, ks)
+        p.bond_sum[i2] = p.bond_sum.get(i2, 0.0) + max(k, ks)
         return cid
 
     for y, (info, (pts, lmat), R) in enumerate(zip(infos, chains, ribbons)):
@@ -417,7 +432,8 @@ def build(engine, yarns, lines=2, kn=0.0, radius=0.0, failure_strain=0.0, fricti
             for j in range(ns):
                 # the line bonds beside station j (one at an end station)
                 kl = [Ky[k, jj] for jj in (j - 1, j) if 0 <= jj < ns - 1] + [Ky[k + 1, jj] for jj in (j - 1, j) if 0 <= jj < ns - 1]
-                arow.append(bond(ids[k][j], ids[k + 1][j], float(np.mean(kl)), _NEVER, mask))
+                ka = float(np.mean(kl))
+                arow.append(bond(ids[k][j], ids[k + 1][j], ka, _NEVER, mask, ks=ka))
             for j in range(ns - 1):
                 drow.append(bond(ids[k][j], ids[k + 1][j + 1], 0.0, _NEVER, mask))
             for j in range(ns - 1):
@@ -438,6 +454,8 @@ def build(engine, yarns, lines=2, kn=0.0, radius=0.0, failure_strain=0.0, fricti
             for i in row:
                 _O.bodies[i].mask = NODE_MASK
                 _O.bodies[i].bounded = True
+                # woven's nodes do not turn; here a turning node would undo the across bonds' shear
+                _O.bodies[i].state.blockedDOFs = 'XYZ'
         # masses: a line carries rho*A/lines per woven length; half of each chord's material length to
         # each of its nodes
         rhoA = info['rho'] * info['area'] / lines
