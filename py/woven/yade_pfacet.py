@@ -19,18 +19,20 @@ Mapping (docs/yade_grid.md, "PFacet ribbons", has the measured figures):
   nodes and connections).
 - axial bonds: a line's bond gets kn = E*A/(lines*L) (L its node distance), so at every gap the lines
   together have woven's E*A/L (measured by a static pull in tests/python/test_yade_pfacet.py). The
-  across bonds get, normal and shear, the stiffness of the line bonds beside them,
-  E*A/(lines*L_station) (L_station: the mean of the station's line gaps): they hold the station's
-  nodes together in every direction about as stiffly as a line holds its length, so a ribbon's
-  section stays whole as woven's (one node a station) does, and they add no more than the line bonds
-  to the time step's Gershgorin sum. Without their shear spring the lines move apart out of plane
-  freely (the quad folds about its diagonal): a sphere pressing on a ribbon's edge twisted it and
-  met its inside at once, 60 um deeper in one step. The nodes do not turn (blocked rotations, as
-  woven's nodes): a turning node would undo that shear. The diagonals get kn = 0: at an angle to the
-  axis any stiffness there adds k_d*cos^2 to the axial stiffness; they only close the PFacets.
-  Bending and twist springs are zeroed (woven's yarns have none), and the line bonds' shear. Bonds
-  are set on the interactions after gridpfacet.gridConnection (which gives young*pi*r^2/L); YADE's
-  bonds also push, woven's yarns are tension-only.
+  across bonds get the stiffness of the line bonds beside them, E*A/(lines*L_station) (L_station:
+  the mean of the station's line gaps): they hold the width about as stiffly as a line holds its
+  length, and add no more than the line bonds to the time step's Gershgorin sum. The diagonals get
+  kn = 0: at an angle to the axis any stiffness there adds k_d*cos^2 to the axial stiffness; they
+  only close the PFacets. So a quad shears in plane and twists (its lines move apart out of plane)
+  freely, as a strip of loose parallel fibres would. Shear, bending and twist springs of every bond
+  are zeroed (woven's yarns have none): a shear spring on the across bonds, tried to keep the section
+  flat, also resisted the bond's rigid rotation (YADE's shear increment is the relative motion of
+  unturning nodes) and lost 2.7 % of the energy in 4 us. Bonds are set on the interactions after
+  gridpfacet.gridConnection (which gives young*pi*r^2/L); YADE's bonds also push, woven's yarns are
+  tension-only.
+- rotations: the nodes do not turn (blocked, as woven's nodes): with friction a contact's shear
+  would spin a node of inertia 0.4*m*r^2 faster than the Gershgorin step allows for, and nothing in
+  the ribbon needs the rotation.
 - masses: a line carries rho*A/lines per length of woven yarn; half of the woven length each chord
   stands for (yade_grid's material length) goes to each of its two nodes, so the total is woven's to
   rounding (b.state.mass set after gridpfacet's own volume lumping).
@@ -55,7 +57,7 @@ Mapping (docs/yade_grid.md, "PFacet ribbons", has the measured figures):
   (Ig2_Sphere_PFacet_ScGridCoGeom, mask CONNECTION_MASK) or the nodes (Ig2_Sphere_Sphere_ScGeom, mask
   BOX_MASK): the PFacet functor picks the edge it measures from the barycentric signs of the sphere
   centre's projection, which for a sphere millimetres across lands far off these sub-millimetre,
-  crimp-tilted triangles; the depth then jumped between edges (18 to 76 um in one step) and flung a
+  crimp-tilted triangles; the depth then jumped between edges (7 to 79 um in one step) and flung a
   node at 5-6 times the impact speed at any time step. projectile_material() picks the young that
   gives kn.
 SI units throughout.
@@ -393,7 +395,7 @@ def build(engine, yarns, lines=2, kn=0.0, radius=0.0, failure_strain=0.0, fricti
 
     def bond(i1, i2, k, adhesion, mask, ks=0.0):
         """A GridConnection i1-i2 and its bond: normal stiffness k [N/m], shear stiffness ks [N/m]
-        (relative displacement across the bond; the nodes do not turn), breaking past `adhesion` [N]."""
+        (0 here, see the module's docstring), breaking past `adhesion` [N]."""
         cid = _O.bodies.append(gridConnection(i1, i2, r, material=p.contact_material, mask=mask))
         it = _O.interactions[i1, i2]
         it.phys.kn, it.phys.ks = k, ks
@@ -432,8 +434,7 @@ def build(engine, yarns, lines=2, kn=0.0, radius=0.0, failure_strain=0.0, fricti
             for j in range(ns):
                 # the line bonds beside station j (one at an end station)
                 kl = [Ky[k, jj] for jj in (j - 1, j) if 0 <= jj < ns - 1] + [Ky[k + 1, jj] for jj in (j - 1, j) if 0 <= jj < ns - 1]
-                ka = float(np.mean(kl))
-                arow.append(bond(ids[k][j], ids[k + 1][j], ka, _NEVER, mask, ks=ka))
+                arow.append(bond(ids[k][j], ids[k + 1][j], float(np.mean(kl)), _NEVER, mask))
             for j in range(ns - 1):
                 drow.append(bond(ids[k][j], ids[k + 1][j + 1], 0.0, _NEVER, mask))
             for j in range(ns - 1):
@@ -454,8 +455,7 @@ def build(engine, yarns, lines=2, kn=0.0, radius=0.0, failure_strain=0.0, fricti
             for i in row:
                 _O.bodies[i].mask = NODE_MASK
                 _O.bodies[i].bounded = True
-                # woven's nodes do not turn; here a turning node would undo the across bonds' shear
-                _O.bodies[i].state.blockedDOFs = 'XYZ'
+                _O.bodies[i].state.blockedDOFs = 'XYZ'  # (module docstring: rotations)
         # masses: a line carries rho*A/lines per woven length; half of each chord's material length to
         # each of its nodes
         rhoA = info['rho'] * info['area'] / lines

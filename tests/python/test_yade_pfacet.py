@@ -32,7 +32,7 @@ def test_static_pull_of_a_straight_ribbon(pf, lines):
     force/extension is E*A/L, within 2 %; the width does not change."""
     O, woven, yp = pf
     from yade._minieigenHP import Vector3
-    O.engines = yp.engines(damping=0.3)
+    O.engines = yp.engines(damping=0.8)  # YADE's non-viscous damping: only the static end state counts
     e = straight_yarn(woven)
     p = yp.build(e, [0], lines=lines, radius=2e-5, crossings=[])
     info = e.yarn(0)
@@ -47,9 +47,15 @@ def test_static_pull_of_a_straight_ribbon(pf, lines):
     for i in last:
         O.bodies[i].state.pos = O.bodies[i].state.pos + Vector3(eps * L, 0, 0)
     O.dt = p.stable_dt(0.5, extra_contacts=0)
-    O.run(20000, True)
-    ke = sum(0.5 * O.bodies[i].state.mass * O.bodies[i].state.vel.squaredNorm() for i in p.node_ids())
-    assert ke < 1e-12 * 0.5 * EA * eps ** 2 * L  # at rest: the forces below are static
+
+    def kinetic():
+        return sum(0.5 * O.bodies[i].state.mass * O.bodies[i].state.vel.squaredNorm() for i in p.node_ids())
+
+    for _ in range(40):  # to rest: the forces below are then static
+        O.run(500, True)
+        if kinetic() < 1e-12 * 0.5 * EA * eps ** 2 * L:
+            break
+    assert kinetic() < 1e-12 * 0.5 * EA * eps ** 2 * L
     F_first = sum(O.forces.f(i)[0] for i in first)
     F_last = -sum(O.forces.f(i)[0] for i in last)
     assert F_first == pytest.approx(EA * eps, rel=0.02)
