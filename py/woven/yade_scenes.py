@@ -154,7 +154,7 @@ def ballistic(p, d, weave_keys, contact_keys):
     KE0 = 0.5 * p.mass * p.V ** 2
     v_blow = 5 * p.V + 2 * math.sqrt(info['E'] / info['rho']) * eps_f  # (sample(): the blow-up check)
     st = {'contact_seen': False, 'clear': 0, 'steady': 0, 'vz_ref': -p.V, 'outcome': 'running',
-          'min_nose': float('inf'), 'max_overlap': 0.0, 'max_body': 0.0, 'unstable': '', 'released': 0.0, 'last_progress': time.time(), 'wall0': time.time()}
+          'min_nose': float('inf'), 'max_overlap': 0.0, 'max_body': 0.0, 'max_node_speed': 0.0, 'unstable': '', 'released': 0.0, 'last_progress': time.time(), 'wall0': time.time()}
     rows = []
     law = [f for f in O.engines if isinstance(f, yade.wrapper.InteractionLoop)][0]
 
@@ -201,6 +201,7 @@ def ballistic(p, d, weave_keys, contact_keys):
         # speed c*eps_f at which a line's end snaps back when its bond breaks (the ribbons' cut ends
         # reached 5.03 V at 200 m/s, the energy books closed to 0.01 %)
         vmax = max(O.bodies[i].state.vel.norm() for i in node_ids)
+        st['max_node_speed'] = max(st['max_node_speed'], vmax)
         if not (math.isfinite(balance) and math.isfinite(vmax)) or balance > 1:
             blow_up('energy %s times the projectile\'s initial kinetic energy' % (balance + 1))
         elif vmax > v_blow:
@@ -285,6 +286,7 @@ def ballistic(p, d, weave_keys, contact_keys):
         'pfacet_lines': lines if p.model == 'yade_pfacet' else None, 'wall_seconds': wall, 'build_seconds': build_seconds,
         'wall_seconds_per_simulated_us': wall / max(O.time * 1e6, 1e-30),
         'max_yarn_penetration': st['max_overlap'], 'max_body_penetration': st['max_body'], 'cps': n_conn,
+        'max_node_speed': st['max_node_speed'], 'node_speed_limit': v_blow,
         'yarn_thickness': info['thickness'], 'unstable_why': st['unstable'] or None, 'grid_radius': g.radius, 'kn': g.kn,
         'fabric_mass': g.total_mass(), 'woven_fabric_mass': g.woven_mass,
         'energy': {'projectile_initial': KE0, 'projectile_final': ke_p, 'fabric_kinetic': rows[-1]['ke_fabric'],
@@ -299,7 +301,7 @@ def ballistic(p, d, weave_keys, contact_keys):
              'simulated_time': 's', 'dt': 's', 'wall_seconds': 's', 'build_seconds': 's', 'energy': 'J',
              'wall_seconds_per_simulated_us': 's/us', 'energy_balance_error': "fraction of the projectile's initial kinetic energy",
              'max_yarn_penetration': 'm', 'max_body_penetration': 'm', 'yarn_thickness': 'm', 'grid_radius': 'm', 'kn': 'N/m', 'fabric_mass': 'kg', 'woven_fabric_mass': 'kg',
-             'first_break_time': 's', 'woven_dt_crit': 's'}
+             'first_break_time': 's', 'woven_dt_crit': 's', 'max_node_speed': 'm/s', 'node_speed_limit': 'm/s'}
     checks = {'energy_balance': {'value': balance, 'limit': p.energy_limit, 'passed': bool(abs(balance) <= p.energy_limit),
                                  'what': '(O.energy kinetic + elastPotential + dissipated, + bond elastic + released '
                                          '- initial) / initial kinetic energy'},
