@@ -238,8 +238,8 @@ if not (isinstance(p.substeps, int) and 1 <= p.substeps <= 64):
 if p.multirate not in (0, 1):
     bad('multirate', '0 or 1')
 if p.substeps > 1 and (p.response == 'penalty' or p.flattening == 'springs' or p.model != 'woven' or p.contact_model == 'paper'):
-    bad('substeps', "1 with response penalty, flattening springs, contact_model paper or model yade (only the gap model's "
-                    "impulses substep)")
+    bad('substeps', "1 with response penalty, flattening springs, contact_model paper or models yade, yade_pfacet (only the "
+                    "gap model's impulses substep)")
 if p.model != 'woven' and (p.plies > 1 or any(ply_angles) or p.shape in ('rcc', 'fsp', 'mesh') or p.yaw or p.obliquity):
     bad('model', "'woven' for packs, rcc, fsp, mesh, yaw and obliquity (models yade, yade_pfacet: one ply, a cube or a "
                  "sphere, face on)")

@@ -39,8 +39,11 @@ Mapping (docs/yade_grid.md, "PFacet ribbons", has the measured figures):
 - breakage: with `failure_strain` > 0 the line bonds are fragile with normalAdhesion =
   E*A*eps_f/lines (YADE breaks a fragile bond when its tensile force passes normalAdhesion): a line
   breaks at the failure strain (raw, not time-filtered as woven's); the across and diagonal bonds
-  never break. remove_broken() erases the PFacets that used a broken line bond, then the connections
-  no PFacet uses any more.
+  never break. Each bond's adhesion is set on its interaction, so engines() has the cohesive Ip2
+  with setCohesionNow off (on, it resets every bond to the nodes' material at the first step).
+  remove_broken() erases, for a broken line bond, the two PFacets of each quad beside it, the
+  quads' diagonals and the line's connection (the across connections stay: the quads on their
+  other side still use them).
 - radius: one radius for nodes, connections and PFacets (YADE requires it), half the yarn thickness
   unless warp and weft ribbons would then overlap as built: then half their smallest distance (they
   just touch). Flat ribbons of a crimped weave come closest at the corners of a crossing's patch,
@@ -74,8 +77,7 @@ from yade.wrapper import (CohFrictMat, FrictMat, ForceResetter, InsertionSortCol
                           Ip2_CohFrictMat_CohFrictMat_CohFrictPhys,
                           Ip2_FrictMat_FrictMat_FrictPhys, Law2_ScGeom6D_CohFrictPhys_CohesionMoment,
                           Law2_GridCoGridCoGeom_FrictPhys_CundallStrack, Law2_ScGridCoGeom_FrictPhys_CundallStrack,
-                          Law2_ScGeom_FrictPhys_CundallStrack, NewtonIntegrator, GridCoGridCoGeom, ScGridCoGeom,
-                          GridNodeGeom6D)
+                          Law2_ScGeom_FrictPhys_CundallStrack, NewtonIntegrator, GridCoGridCoGeom, ScGridCoGeom)
 
 from . import arrays
 from .yade_grid import CONNECTION_MASK, WARP_MASK, WEFT_MASK, NODE_MASK, BOX_MASK, _nodes_of_yarn  # noqa: F401
@@ -247,9 +249,10 @@ class PFacetFabric:
         return dt_factor * worst
 
     def remove_broken(self):
-        """Erases what a broken line bond leaves: the PFacets that used it (a cut ribbon no longer
-        collides across the cut), its connection, and then the across and diagonal connections no
-        PFacet uses any more. Returns how many line bonds broke since the last call."""
+        """Erases what a broken line bond leaves: the two PFacets of each quad beside it (a cut
+        ribbon no longer collides across the cut), those quads' diagonals and its own connection; the
+        across connections stay (the quads on their other side use them). Returns how many line bonds
+        broke since the last call."""
         n = 0
         for y, lines in enumerate(self.along):
             for k, ids in enumerate(lines):
@@ -290,8 +293,9 @@ class PFacetFabric:
         m = 0.0
         for i in _O.interactions:
             g = i.geom
-            if isinstance(g, GridCoGridCoGeom) or (isinstance(g, ScGridCoGeom) and
-                                                   i.id1 in self.node_set and i.id2 in self.pfacet_set):
+            ids = (i.id1, i.id2)  # YADE may hold a node-PFacet pair either way round
+            if isinstance(g, GridCoGridCoGeom) or (isinstance(g, ScGridCoGeom) and any(x in self.node_set for x in ids)
+                                                   and any(x in self.pfacet_set for x in ids)):
                 m = max(m, g.penetrationDepth)
         return m
 
