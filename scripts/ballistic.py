@@ -123,7 +123,8 @@ defaults.update({
     'energy_limit': (0.01, '', 'allowed energy-balance error / initial kinetic energy'),
     'overlap_limit': (0.1, '', 'allowed largest overlap until the first break / yarn thickness (contact_model=gap)'),
     'out': ('', '', 'output folder (default out/ballistic)'),
-    'model': ('woven', '', "'woven', or 'yade': the same ply in YADE's grid elements (woven.yade_grid, docs/yade_grid.md)"),
+    'model': ('woven', '', "'woven', 'yade': the same ply in YADE's grid elements (woven.yade_grid), or 'yade_pfacet': "
+              "in YADE PFacet ribbons (woven.yade_pfacet; docs/yade_grid.md)"),
     # Back-face deformation (woven.backface, docs/ballistic.md): measured at every sample.
     'backface': (True, '', 'measure the back-face deformation (cone apex depth, base radius, fronts) at every sample'),
     # Twice the largest out-of-plane move of decrimping (KM2 706: crimp height 0.1 mm, nodes +-0.05 mm),
@@ -194,15 +195,15 @@ if p.backing not in ('none', 'wall', 'facet'):
     bad('backing', "'none', 'wall' or 'facet'")
 if not (math.isfinite(p.backing_standoff) and 0 < p.backing_standoff <= 0.1):
     bad('backing_standoff', '(0, 0.1] m')
-if p.backing != 'none' and p.model == 'yade':
-    bad('backing', "'none' with model yade")
+if p.backing != 'none' and p.model != 'woven':
+    bad('backing', "'none' with model %s" % p.model)
 PINCH_SWEEPS = 200  # sweeps with a backing or a frame, unless max_iterations is given
 if p.frame not in ('none', 'mesh'):
     bad('frame', "'none' or 'mesh'")
 if p.frame == 'mesh' and p.clamp != 0:
     bad('clamp', '0 with frame mesh (the jaws hold the edges)')
-if p.frame == 'mesh' and p.model == 'yade':
-    bad('frame', "'none' with model yade")
+if p.frame == 'mesh' and p.model != 'woven':
+    bad('frame', "'none' with model %s" % p.model)
 if p.frame == 'mesh':
     if not (math.isfinite(p.frame_width) and 0 < p.frame_width <= 0.25 * p.side):
         bad('frame_width', '(0, side/4 = %g] m' % (0.25 * p.side))
@@ -246,8 +247,8 @@ if not 3 <= p.vtk_rings <= 256:
 if not (math.isfinite(p.progress) and p.progress >= 0):
     bad('progress', '[0, inf) s (0: none)')
 woven.contact.check_friction(p)
-if p.model == 'yade' and p.body_friction > 0:  # woven.yade_grid gives the projectile a frictionless material
-    bad('body_friction', "0 with model = 'yade' (its projectile-yarn contacts are frictionless); [0, 2] with model = 'woven'")
+if p.model != 'woven' and p.body_friction > 0:  # woven.yade_grid / yade_pfacet give the projectile a frictionless material
+    bad('body_friction', "0 with model = %r (its projectile-yarn contacts are frictionless); [0, 2] with model = 'woven'" % p.model)
 if not (math.isfinite(p.backface_w) and 0 < p.backface_w <= 1e-3):
     bad('backface_w', '(0, 1e-3] m')
 if not (math.isfinite(p.backface_strain) and 0 <= p.backface_strain <= 0.1):
@@ -264,17 +265,18 @@ if not (isinstance(p.substeps, int) and 1 <= p.substeps <= 64):
     bad('substeps', 'an integer in [1, 64]')
 if p.multirate not in (0, 1):
     bad('multirate', '0 or 1')
-if p.substeps > 1 and (p.response == 'penalty' or p.flattening == 'springs' or p.model == 'yade' or p.contact_model == 'paper'):
-    bad('substeps', "1 with response penalty, flattening springs, contact_model paper or model yade (only the gap model's "
-                    "impulses substep)")
-if p.model == 'yade' and (p.plies > 1 or any(ply_angles) or p.shape in ('rcc', 'fsp', 'mesh') or p.yaw or p.obliquity):
-    bad('model', "'woven' for packs, rcc, fsp, mesh, yaw and obliquity (model yade: one ply, a cube or a sphere, face on)")
+if p.substeps > 1 and (p.response == 'penalty' or p.flattening == 'springs' or p.model != 'woven' or p.contact_model == 'paper'):
+    bad('substeps', "1 with response penalty, flattening springs, contact_model paper or models yade, yade_pfacet (only the "
+                    "gap model's impulses substep)")
+if p.model != 'woven' and (p.plies > 1 or any(ply_angles) or p.shape in ('rcc', 'fsp', 'mesh') or p.yaw or p.obliquity):
+    bad('model', "'woven' for packs, rcc, fsp, mesh, yaw and obliquity (models yade, yade_pfacet: one ply, a cube or a "
+                 "sphere, face on)")
 d = out_dir('ballistic', p)
 if p.shape == 'mesh':  # names the file when it is unreadable, open, non-manifold or wound inward
     solid = woven.mesh.solid(p.mesh, p.mesh_scale, density=p.density, nose_axis=p.nose_axis)
     size = 2 * solid['radius']
     mass = p.mass if 'mass' in p.given else solid['mass']
-if p.model == 'yade':
+if p.model != 'woven':
     sys.exit(woven.yade_scenes.ballistic(p, d, [k for k in WEAVE_KEYS if k in p], CONTACT_KEYS))
 
 # --- the ply and the projectile (an ordinary YADE body) ---

@@ -22,6 +22,8 @@
 #   no_flattening    the paper's method, sections never flatten
 #   section_springs  the paper's method, flattening resisted by the section springs of Eq. 7, impulses past the MCD
 #   yade_grid        YADE's GridNode/GridConnection yarns, FrictPhys contacts of stiffness kn
+#   yade_pfacet      YADE's PFacet ribbons (woven.yade_pfacet) of pfacet_lines node lines, the same contacts;
+#                    minutes a run, so only when `methods` names it
 # Accuracy of a run: the projectile's velocity drop over the same simulated time against the
 # reference run (impulse, finest resolution, half the time step): |dv - dv_ref| / dv_ref; the largest
 # yarn-yarn and projectile-yarn interpenetration; the energy-balance error. Speed: wall seconds of
@@ -56,7 +58,7 @@ p = read_params({
     'size': (3.0e-3, 'm', 'sphere diameter or cube edge'),
     'mass': (0.25e-3, 'kg', 'projectile mass'),
     'methods': ('', '', 'comma-separated subset of impulse, impulse_adaptive, chords, paper, penalty, no_flattening, section_springs, '
-                'yade_grid (default: all)'),
+                'yade_grid, yade_pfacet (default: all but yade_pfacet)'),
     'map_methods': ('', '', "the stability map's methods, comma-separated, among those run (default: every method "
                     "run but impulse_adaptive and chords, which share the impulse method's map)"),
     'fine_radii': ('1,2', '', "impulse_adaptive's fine_radius values, comma-separated multiples of the projectile's size, "
@@ -114,12 +116,18 @@ METHODS = {
     'no_flattening': ({'contact_model': 'paper', 'flattening': 'none'}, None, [None]),
     'section_springs': ({'contact_model': 'paper', 'flattening': 'springs'}, 'section_stiffness', [1e3, 1e4, 1e5]),
     'yade_grid': ({'model': 'yade'}, 'kn', [1e5, 1e6, 1e7]),
+    'yade_pfacet': ({'model': 'yade_pfacet'}, 'kn', [1e5, 1e6, 1e7]),
 }
+# Opt-in methods: a PFacet run is minutes on the quick ply (YADE hands every warp-weft PFacet pair to
+# its nodes and connections, ~8 candidate interactions a body, docs/yade_grid.md).
+OPT_IN = ('yade_pfacet',)
 if p.methods:
     chosen = [m.strip() for m in p.methods.split(',') if m.strip()]
     if not chosen or any(m not in METHODS for m in chosen) or 'impulse' not in chosen:
         bad('methods', 'a comma-separated subset of %s that includes impulse (the reference)' % ', '.join(METHODS))
     METHODS = {m: METHODS[m] for m in METHODS if m in chosen}
+else:
+    METHODS = {m: METHODS[m] for m in METHODS if m not in OPT_IN}
 # The stability map's methods. The adaptive method is the impulse method at another resolution (the
 # map's scene is at 1 CP); the chord contacts share the default's gap functions, rows and projection.
 MAP_METHODS = [m for m in METHODS if m not in ('impulse_adaptive', 'chords')]
@@ -128,31 +136,37 @@ if p.map_methods:
     if not asked or any(m not in MAP_METHODS for m in asked):
         bad('map_methods', 'a comma-separated subset of %s' % ', '.join(MAP_METHODS))
     MAP_METHODS = [m for m in MAP_METHODS if m in asked]
-DT_KEY = {'yade_grid': 'dt_factor'}  # the others: 'safety' (fraction of the chain's dt_crit)
+DT_KEY = {'yade_grid': 'dt_factor', 'yade_pfacet': 'dt_factor'}  # the others: 'safety' (fraction of the chain's dt_crit)
 SCENE = {'side': side, 't_end': t_end, 'V': p.V, 'shape': p.shape, 'size': p.size, 'mass': p.mass,
          'stop': 0, 'vtk_every': -1, 'progress': 0, 'samples': 50, 'energy_limit': 0.99, 'overlap_limit': 100,
          'pictures': 0, 'backface': 0}  # the method's time, not the pictures' frames and back-face measures
 SUBSTEPS = [1, 2, 4]  # of the impulse methods, each s <= the case's CPs per span
 if p.quick:
     RES, DTS, REF_RES = [1, 2, 4], [0.7], 4
-    STIFF_KEEP = {'penalty': [1e6], 'section_springs': [1e4], 'yade_grid': [1e6, 1e7]}
+    STIFF_KEEP = {'penalty': [1e6], 'section_springs': [1e4], 'yade_grid': [1e6, 1e7], 'yade_pfacet': [1e7]}
 else:
     RES, DTS, REF_RES = [1, 2, 4], [0.35, 0.7], 4
     STIFF_KEEP = {}
+# The PFacet ribbons' resolutions: CPs per span (each doubling is ~4x the wall time: twice the bodies
+# at half the step) and node lines across a ribbon.
+RES_OF = {'yade_pfacet': [1, 2]}
+PFACET_LINES = [2, 3]
 
 
-def case_name(method, res, dt, k, sub=1, mr=0):
-    tail = ('' if sub == 1 else '_s%d' % sub) + ('_mr' if mr else '')
+def case_name(method, res, dt, k, sub=1, mr=0, lines=None):
+    tail = ('' if sub == 1 else '_s%d' % sub) + ('_mr' if mr else '') + ('' if lines is None else '_l%d' % lines)
     if method == 'impulse_adaptive':
         return '%s_cp%d_dt%g_r%g%s' % (method, res, dt, k, tail)
     return '%s_cp%d_dt%g%s%s' % (method, res, dt, '' if k is None else '_k%g' % k, tail)
 
 
-def keys_of(method, res, dt, k, sub=1, mr=0):
+def keys_of(method, res, dt, k, sub=1, mr=0, lines=None):
     extra, kkey, _ = METHODS[method]
     q = dict(SCENE)
     q.update(extra)
     q['cp_per_span'] = res
+    if lines is not None:
+        q['pfacet_lines'] = lines
     if sub > 1:
         q['substeps'] = sub
     if mr:
@@ -197,17 +211,18 @@ def ballistic_figures(r):
 cases = []
 for method, (extra, kkey, ks) in METHODS.items():
     for k in STIFF_KEEP.get(method, ks):
-        for res in RES:
+        for res in RES_OF.get(method, RES):
             if method == 'impulse_adaptive' and res < 2:  # 1 CP everywhere: the uniform case
                 continue
             for sub in (SUBSTEPS if method in ('impulse', 'impulse_adaptive') else [1]):
                 if sub > res:
                     continue
                 for dt in DTS:
-                    cases.append((method, res, dt, k, sub, 0))
+                    for lines in (PFACET_LINES if method == 'yade_pfacet' else [None]):
+                        cases.append((method, res, dt, k, sub, 0, lines))
                     if method == 'impulse_adaptive' and sub > 1:  # its coarse CPs once per step (multirate)
-                        cases.append((method, res, dt, k, sub, 1))
-ref_case = ('impulse', REF_RES, min(DTS) / 2, None, 1, 0)
+                        cases.append((method, res, dt, k, sub, 1, None))
+ref_case = ('impulse', REF_RES, min(DTS) / 2, None, 1, 0, None)
 cases.insert(0, ref_case)
 t_all = time.time()
 results = {}
@@ -228,9 +243,9 @@ dv_ref = p.V - ref['v_end']
 rows = []
 for c in cases:
     f = ballistic_figures(results[c])
-    method, res, dt, k, sub, mr = c
+    method, res, dt, k, sub, mr, lines = c
     adaptive = method == 'impulse_adaptive'
-    row = {'method': method, 'cp_per_span': res, 'dt_over_dt_crit': dt, 'substeps': sub, 'multirate': mr,
+    row = {'method': method, 'cp_per_span': res, 'dt_over_dt_crit': dt, 'substeps': sub, 'multirate': mr, 'pfacet_lines': lines,
            'stiffness': None if adaptive else k,
            'fine_radius': k if adaptive else None, 'reference': c == ref_case}
     if f is None:
@@ -245,7 +260,7 @@ for c in cases:
                     'dt': f['dt'], 'cps': f['cps'], 'broken': f['broken']})
     rows.append(row)
 
-COLS = ['method', 'cp_per_span', 'dt_over_dt_crit', 'substeps', 'multirate', 'stiffness', 'fine_radius', 'status', 'v_end', 'velocity_error',
+COLS = ['method', 'cp_per_span', 'pfacet_lines', 'dt_over_dt_crit', 'substeps', 'multirate', 'stiffness', 'fine_radius', 'status', 'v_end', 'velocity_error',
         'max_yarn_penetration', 'max_body_penetration', 'energy_error', 'wall_per_us', 'dt', 'cps', 'broken', 'reference']
 
 
@@ -255,13 +270,14 @@ def fmt(v):
 
 write_csv(os.path.join(d, 'cases.csv'), COLS, rows, 4)
 with atomic_open(os.path.join(d, 'table.md')) as f:
-    f.write('| method | CPs/span | dt/dt_crit | substeps | stiffness [N/m] | fine radius [mm] | CPs | status | v_end [m/s] | '
-            'velocity-drop error | max yarn overlap [mm] | max projectile overlap [mm] | energy error | wall s / us |\n')
-    f.write('|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n')
+    f.write('| method | CPs/span | PFacet lines | dt/dt_crit | substeps | stiffness [N/m] | fine radius [mm] | CPs | status | '
+            'v_end [m/s] | velocity-drop error | max yarn overlap [mm] | max projectile overlap [mm] | energy error | wall s / us |\n')
+    f.write('|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n')
     for r in rows:
         mm = lambda v: '' if v is None or not isinstance(v, float) else '%.3f' % (1e3 * v)  # noqa: E731
-        f.write('| %s%s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' % (
-            r['method'], ' (reference)' if r['reference'] else '', r['cp_per_span'], fmt(r['dt_over_dt_crit']),
+        f.write('| %s%s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' % (
+            r['method'], ' (reference)' if r['reference'] else '', r['cp_per_span'], fmt(r['pfacet_lines']) or '–',
+            fmt(r['dt_over_dt_crit']),
             '%d%s' % (r['substeps'], ' multi-rate' if r['multirate'] else ''),
             fmt(r['stiffness']) or '–', mm(r['fine_radius']) or '–', fmt(r.get('cps')), r['status'], fmt(r.get('v_end')),
             '' if r.get('velocity_error') is None else '%.2f %%' % (100 * r['velocity_error']),
@@ -275,11 +291,12 @@ with atomic_open(os.path.join(d, 'table.md')) as f:
 # curve turns linear) against the built crimp and Kevlar's 0.25-0.65 %, with the final overlap.
 scene_rows = []
 SMITH_EL = [1000, 2000] if p.quick else [600, 1000, 2000, 4000]  # smith.py refuses < 518 at this speed
-for model in ('woven', 'yade'):
+YADE_SCENE_MODELS = ['yade'] + (['yade_pfacet'] if 'yade_pfacet' in METHODS else [])
+for model in ['woven'] + YADE_SCENE_MODELS:
     for n in SMITH_EL:
         keys = {'elements': n, 'levels': 1}
-        if model == 'yade':
-            keys['model'] = 'yade'
+        if model != 'woven':
+            keys['model'] = model
         r = run('smith.py', 'smith_%s_%d' % (model, n), keys, os.path.join(d, 'runs'))
         s = r['summary']
         row = {'scene': 'smith', 'model': model, 'elements': n, 'status': 'crashed' if s is None else s['status']}
@@ -292,10 +309,10 @@ for model in ('woven', 'yade'):
             row['why'] = r['tail'][-200:].replace('\n', ' ')
         scene_rows.append(row)
 TENSION = {'nx': 3, 'ny': 3} if p.quick else {}
-for model in ('woven', 'yade'):
+for model in ['woven'] + YADE_SCENE_MODELS:
     keys = dict(TENSION)
-    if model == 'yade':
-        keys['model'] = 'yade'
+    if model != 'woven':
+        keys['model'] = model
     r = run('tension.py', 'tension_%s' % model, keys, os.path.join(d, 'runs'))
     s = r['summary']
     row = {'scene': 'tension', 'model': model, 'status': 'crashed' if s is None else s['status']}
@@ -336,7 +353,8 @@ grid_runs = [r for r in rows if r['method'] == 'yade_grid' and good(r)]
 
 def name_of(r):
     return case_name(r['method'], r['cp_per_span'], r['dt_over_dt_crit'],
-                     r['fine_radius'] if r['method'] == 'impulse_adaptive' else r['stiffness'], r['substeps'], r['multirate'])
+                     r['fine_radius'] if r['method'] == 'impulse_adaptive' else r['stiffness'], r['substeps'], r['multirate'],
+                     r['pfacet_lines'])
 
 
 def matched(grid, pool, strict):
@@ -359,6 +377,13 @@ for g in grid_runs:
                        'woven_wall_per_us': None if w is None else w['wall_per_us'],
                        'speed_ratio': None if w is None else g['wall_per_us'] / w['wall_per_us']})
 best_grid = min(grid_runs, key=lambda g: g['velocity_error']) if grid_runs else None
+pfacet_runs = [r for r in rows if r['method'] == 'yade_pfacet' and good(r)]
+best_pfacet = min(pfacet_runs, key=lambda g: g['velocity_error']) if pfacet_runs else None
+pfacet_ratio = pfacet_ratio_case = None
+if best_pfacet is not None:
+    w = matched(best_pfacet, impulse_runs, False)
+    if w is not None:
+        pfacet_ratio, pfacet_ratio_case = best_pfacet['wall_per_us'] / w['wall_per_us'], name_of(w)
 headline = headline_uniform = headline_case = None
 if best_grid is not None:
     w = matched(best_grid, impulse_runs, False)
@@ -373,7 +398,7 @@ import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt
 MARK = {'impulse': ('o', 'C0'), 'impulse_adaptive': ('P', 'C9'), 'chords': ('<', 'C5'), 'paper': ('v', 'C4'), 'penalty': ('s', 'C1'), 'no_flattening': ('^', 'C2'),
-        'section_springs': ('D', 'C3'), 'yade_grid': ('X', 'k')}
+        'section_springs': ('D', 'C3'), 'yade_grid': ('X', 'k'), 'yade_pfacet': ('*', 'C7')}
 fig, ax = plt.subplots(1, 3, figsize=(17, 5.2))
 panels = (('velocity_error', 'velocity-drop error vs reference', 1.0),
           ('max_yarn_penetration', 'largest yarn-yarn overlap [mm]', 1e3),
@@ -387,11 +412,12 @@ for a, (key, label, scale) in zip(ax, panels):
         x = [r['wall_per_us'] for r in pts]
         y = [max(scale * r[key], 1e-6) for r in pts]
         a.scatter(x, y, marker=mk, color=colour, s=[30 + 25 * r['cp_per_span'] for r in pts], label=method,
-                  facecolors='none' if method == 'yade_grid' else colour, alpha=0.85)
+                  facecolors='none' if method in ('yade_grid', 'yade_pfacet') else colour, alpha=0.85)
         for r, xi, yi in zip(pts, x, y):
             a.annotate('%d%s%s%s' % (r['cp_per_span'], '' if r['stiffness'] is None else ' k%.0e' % r['stiffness'],
                                      '' if r['fine_radius'] is None else ' r%.1f mm' % (1e3 * r['fine_radius']),
-                                     ('' if r['substeps'] == 1 else ' s%d' % r['substeps']) + (' mr' if r['multirate'] else '')),
+                                     ('' if r['substeps'] == 1 else ' s%d' % r['substeps']) + (' mr' if r['multirate'] else '')
+                                     + ('' if r['pfacet_lines'] is None else ' l%d' % r['pfacet_lines'])),
                        (xi, yi), fontsize=6, xytext=(3, 2), textcoords='offset points')
     a.set_xscale('log')
     a.set_yscale('log')
@@ -425,11 +451,11 @@ map_rows = []
 if p.map:
     if (p.map_size or ('quick' if p.quick else 'full')) == 'quick':
         M_DT, M_V = [0.5, 1.5], [200.0, 1000.0]
-        M_K = {'penalty': [1e6, 1e8], 'section_springs': [1e5], 'yade_grid': [1e6, 1e8]}
+        M_K = {'penalty': [1e6, 1e8], 'section_springs': [1e5], 'yade_grid': [1e6, 1e8], 'yade_pfacet': [1e6, 1e8]}
     else:
         M_DT, M_V = [0.25, 0.5, 0.9, 1.5, 3.0], [100.0, 300.0, 1000.0]
         M_K = {'penalty': [1e5, 1e6, 1e7, 1e8, 1e9], 'section_springs': [1e3, 1e4, 1e5, 1e6, 1e8],
-               'yade_grid': [1e5, 1e6, 1e7, 1e8, 1e9]}
+               'yade_grid': [1e5, 1e6, 1e7, 1e8, 1e9], 'yade_pfacet': [1e5, 1e6, 1e7, 1e8, 1e9]}
     if MAP_SPEEDS:
         M_V = MAP_SPEEDS
     MSCENE = {'side': 0.00635, 't_end': 8e-6, 'shape': 'sphere', 'size': 1.5e-3, 'mass': 0.05e-3,
@@ -527,12 +553,14 @@ measured = {'cases': len(rows), 'reference_case': case_name(*ref_case), 'referen
             'speed_ratio_uniform_only': headline_uniform,
             'matched_pairs': ratios,
             'best_grid_case': None if best_grid is None else case_name('yade_grid', best_grid['cp_per_span'], best_grid['dt_over_dt_crit'], best_grid['stiffness']),
+            'best_pfacet_case': None if best_pfacet is None else name_of(best_pfacet),
+            'pfacet_speed_ratio_at_matched_accuracy': pfacet_ratio, 'pfacet_speed_ratio_woven_case': pfacet_ratio_case,
             'rows': rows, 'scenes': scene_rows, 'stability': map_rows, 'wall_seconds': time.time() - t_all}
 checks = {}
 if headline is not None:
     checks['speed_ratio'] = {'value': headline, 'limit': 10.0, 'passed': bool(headline >= 10.0),
                              'what': 'woven impulse faster than YADE grid at equal or better velocity error (goal)'}
-status = 'ok' if all(r['status'] != 'crashed' for r in rows if r['method'] != 'yade_grid') else 'failed'
+status = 'ok' if all(r['status'] != 'crashed' for r in rows if r['method'] not in ('yade_grid', 'yade_pfacet')) else 'failed'
 write_summary(d, 'compare', p, measured, {'speed_ratio_goal': 10.0, 'stability_energy_limit': 0.05},
               {'reference_velocity_drop': 'm/s', 'wall_per_us': 's/us', 'max_yarn_penetration': 'm',
                'max_body_penetration': 'm', 'velocity_error': 'fraction of the reference velocity drop',

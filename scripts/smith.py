@@ -30,10 +30,11 @@ p = read_params({
     'strain_tol': (0.01, '', 'allowed relative strain error at the finest resolution'),
     'speed_tol': (0.03, '', 'allowed relative U_E error at the finest resolution'),
     'out': ('', '', 'output folder (default out/smith)'),
-    'model': ('woven', '', "'woven', or 'yade': the same yarn as YADE grid nodes and connections (woven.yade_grid)"),
+    'model': ('woven', '', "'woven', 'yade': the same yarn as YADE grid nodes and connections (woven.yade_grid), or "
+              "'yade_pfacet': as a YADE PFacet ribbon of two node lines (woven.yade_pfacet)"),
 })
-if p.model not in ('woven', 'yade'):
-    raise ValueError("model = %r is invalid: allowed 'woven' or 'yade'" % p.model)
+if p.model not in ('woven', 'yade', 'yade_pfacet'):
+    raise ValueError("model = %r is invalid: allowed 'woven', 'yade' or 'yade_pfacet'" % p.model)
 # Physical ranges (the weave keys' for E, rho, area) and a size limit, before anything is built.
 RANGES = {'V': (1e-3, 5000), 'E': (1e5, 1e13), 'rho': (1, 1e5), 'area': (1e-16, 1e-2), 'length': (1e-4, 10)}
 for k, (lo, hi) in RANGES.items():
@@ -96,7 +97,7 @@ def run(n):
     eng = woven.FabricEngine(f)
     mid = n // 2
     t_end = p.duration * (L / 2) / c
-    if p.model == 'yade':
+    if p.model != 'woven':
         return run_grid(eng, n, mid, t_end)
     eng.fix(0)
     eng.fix(n)
@@ -129,17 +130,26 @@ def run(n):
 
 def run_grid(eng, n, mid, t_end):
     """The same yarn as YADE grid nodes on woven's nodes (no crossings: offset 0) with bonds of
-    K = E A / l0 and no bending, driven by YADE's NewtonIntegrator: the struck node's velocity is
-    held by blocked DOFs, the ends are fixed. O.dt = safety * sqrt(m/K), the chain's critical step."""
-    from woven import yade_grid
-    O.engines = yade_grid.engines()
+    K = E A / l0 and no bending (model=yade_pfacet: a ribbon of two such lines, each E A / (2 l0),
+    across the section's width), driven by YADE's NewtonIntegrator: the struck station's velocity is
+    held by blocked DOFs, the ends are fixed. O.dt = safety * the Gershgorin step of its bonds."""
+    from woven import yade_grid, yade_pfacet
     # no crossings: the radius only has to keep non-neighbour connections of the yarn apart (< l0/2)
-    g = yade_grid.build(eng, [0], radius=0.25 * p.length / n, offset=0, crossings=[])
+    if p.model == 'yade_pfacet':
+        O.engines = yade_pfacet.engines()
+        g = yade_pfacet.build(eng, [0], radius=0.25 * p.length / n, offset=0, crossings=[])
+        lines = g.lines[0]
+    else:
+        O.engines = yade_grid.engines()
+        g = yade_grid.build(eng, [0], radius=0.25 * p.length / n, offset=0, crossings=[])
+        lines = [g.nodes[0]]
     ids = g.nodes[0]
+    struck = [ln[mid] for ln in lines]
     g.fix_ends()
-    b = O.bodies[ids[mid]]
-    b.state.blockedDOFs = 'xyzXYZ'
-    b.state.vel = Vector3(0, p.V, 0)
+    for i in struck:
+        b = O.bodies[i]
+        b.state.blockedDOFs = 'xyzXYZ'
+        b.state.vel = Vector3(0, p.V, 0)
     O.dt = g.stable_dt(p.safety, extra_contacts=0)
     check_steps(t_end, O.dt, 'safety', p.safety)
     steps = int(math.ceil(t_end / O.dt))
@@ -149,7 +159,7 @@ def run_grid(eng, n, mid, t_end):
     work = [0.0]
 
     def driver_work():
-        work[0] -= O.forces.f(ids[mid])[1] * p.V * O.dt
+        work[0] -= sum(O.forces.f(i)[1] for i in struck) * p.V * O.dt
 
     import __main__
     __main__.grid_driver_work = driver_work
@@ -164,7 +174,8 @@ def run_grid(eng, n, mid, t_end):
     E0 = energy()
 
     def pos():
-        return np.array([list(O.bodies[i].state.pos) for i in ids])
+        # the yarn's centre line: the mean of its lines (one for the grid) station by station
+        return np.mean([[list(O.bodies[i].state.pos) for i in ln] for ln in lines], axis=0)
 
     X0 = pos()
     O.run(steps // 2, True)
@@ -173,7 +184,7 @@ def run_grid(eng, n, mid, t_end):
     t2, X = O.time, pos()
     k2 = kink(X, t2)
     UE = (k2 - k1) / (t2 - t1)
-    e = np.linalg.norm(np.diff(X, axis=0), axis=1) / g.length0[0] - 1
+    e = np.linalg.norm(np.diff(X, axis=0), axis=1) / np.linalg.norm(np.diff(X0, axis=0), axis=1) - 1
     xk_mat, xl = th['U_L'] * t2, c * t2
     xm = 0.5 * (X0[:-1, 0] + X0[1:, 0])
     lo, hi = xk_mat + 0.2 * (xl - xk_mat), xk_mat + 0.8 * (xl - xk_mat)

@@ -41,7 +41,8 @@ defaults.update({
     'initial_fit': (0.25, '', 'the initial stiffness is fitted over the first this fraction of the strain range'),
     'penetration_limit': (0.01, '', 'allowed final overlap as a fraction of the yarn thickness'),
     'out': ('', '', 'output folder (default out/tension)'),
-    'model': ('woven', '', "'woven', or 'yade': the same weave in YADE's grid elements (woven.yade_grid, docs/yade_grid.md)"),
+    'model': ('woven', '', "'woven', 'yade': the same weave in YADE's grid elements (woven.yade_grid), or 'yade_pfacet': "
+              "in YADE PFacet ribbons (woven.yade_pfacet; docs/yade_grid.md)"),
 })
 defaults.update(woven.yade_grid.GRID_KEYS)
 p = read_params(defaults)
@@ -60,7 +61,7 @@ woven.contact.check_friction(p)
 d = out_dir('tension', p)
 weave_args = {k: p[k] for k in WEAVE_KEYS}
 contact_args = {k: p[k] for k in CONTACT_KEYS}
-if p.model == 'yade':
+if p.model != 'woven':
     sys.exit(woven.yade_scenes.tension(p, d, weave_args))
 
 

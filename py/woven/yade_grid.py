@@ -65,14 +65,20 @@ WARP_MASK, WEFT_MASK = 1 | 4, 1 | 8
 NODE_MASK = 2
 BOX_MASK = 2 | 16
 
-#: keys of the grid model in the scene scripts: (default, unit, description)
+#: keys of the YADE models in the scene scripts (model=yade, and model=yade_pfacet: woven.yade_pfacet):
+#: (default, unit, description)
 GRID_KEYS = {
-    'kn': (0.0, 'N/m', 'model=yade: normal stiffness of grid-grid and projectile contacts; 0: the yarn element '
-                       'axial stiffness E*A/l0'),
+    'kn': (0.0, 'N/m', 'model=yade / yade_pfacet: normal stiffness of yarn-yarn and projectile contacts; 0: the yarn '
+                       'element axial stiffness E*A/l0'),
     'grid_radius': (0.0, 'm', 'model=yade: radius of the grid cylinders; 0: half the smallest centre distance of crossing '
-                              'connections (they just touch)'),
+                              'connections (they just touch); model=yade_pfacet: the ribbons\' radius; 0: half the yarn '
+                              'thickness, or less where warp and weft ribbons would overlap (they just touch)'),
     'bending': (False, '', 'model=yade: keep YADE bending/shear/twist springs of the bonds (woven yarns have none)'),
-    'dt_factor': (0.5, '', 'model=yade: O.dt = dt_factor * the critical step of the stiffest bond or contact'),
+    'dt_factor': (0.5, '', 'model=yade / yade_pfacet: O.dt = dt_factor * the critical step of the stiffest bond or contact'),
+    'pfacet_lines': (2, '', 'model=yade_pfacet: node lines across each PFacet ribbon, an integer in [2, 16]'),
+    'pfacet_projectile': ('nodes', '', "model=yade_pfacet: what a sphere projectile meets: 'nodes' (the ribbons' grid nodes, "
+                          "Ig2_Sphere_Sphere_ScGeom) or 'pfacets' (Ig2_Sphere_PFacet_ScGridCoGeom; its contact depth "
+                          "jumps on these small tilted triangles, docs/yade_grid.md)"),
 }
 
 
@@ -126,6 +132,10 @@ class GridFabric:
     def total_mass(self):
         """Sum of the node masses [kg] (the connections carry none in YADE's dynamics)."""
         return sum(_O.bodies[i].state.mass for i in self.node_ids())
+
+    def end_nodes(self, k):
+        """([first node id], [last node id]) of yarn k: its clamp or grip (as PFacetFabric.end_nodes)."""
+        return [self.nodes[k][0]], [self.nodes[k][-1]]
 
     def yarn_length(self, k):
         """Polyline length of yarn k through its nodes now [m]."""

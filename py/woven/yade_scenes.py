@@ -1,7 +1,9 @@
-"""The scenes' `model=yade` runs: the same fabric in YADE's grid elements (woven.yade_grid), driven by
-YADE's own engines, with the same summary.json figures as the woven runs. SI units.
+"""The scenes' `model=yade` and `model=yade_pfacet` runs: the same fabric in YADE's grid elements
+(woven.yade_grid) or PFacet ribbons (woven.yade_pfacet), driven by YADE's own engines, with the same
+summary.json figures as the woven runs. SI units.
 
     yade -n -x scripts/ballistic.py model=yade side=0.0127 t_end=3e-5
+    yade -n -x scripts/ballistic.py model=yade_pfacet side=0.0127 t_end=1.5e-5
 """
 import math
 import sys
@@ -13,21 +15,50 @@ from yade import utils
 from yade._minieigenHP import Vector3
 
 from . import yade_grid as yg
+from . import yade_pfacet as yp
 from .output import savetxt
 from .params import check_steps
 
 _O = yade.wrapper.Omega()
 
-MODELS = ('woven', 'yade')
+MODELS = ('woven', 'yade', 'yade_pfacet')
+#: what each YADE model is called in the scenes' progress lines
+LABEL = {'yade': 'yade grid', 'yade_pfacet': 'yade pfacet'}
 
 
 def check_model(p):
-    """Raises ValueError naming the key when p['model'] is not 'woven' or 'yade'."""
+    """Raises ValueError naming the key when p['model'] is not 'woven', 'yade' or 'yade_pfacet', or a
+    key of the YADE models is out of its range."""
     if p['model'] not in MODELS:
-        raise ValueError("model = %r is invalid: allowed 'woven' or 'yade'" % p['model'])
+        raise ValueError("model = %r is invalid: allowed 'woven', 'yade' or 'yade_pfacet'" % p['model'])
     # above 1 on purpose: the stability maps (scripts/compare.py) look for the blow-up
-    if p['model'] == 'yade' and not (0 < p['dt_factor'] <= 10):
+    if p['model'] != 'woven' and not (0 < p['dt_factor'] <= 10):
         raise ValueError('dt_factor = %r is invalid: allowed (0, 10]' % p['dt_factor'])
+    if 'pfacet_lines' in p:
+        lo, hi = yp.LINES_RANGE
+        n = p['pfacet_lines']
+        if not (isinstance(n, int) and not isinstance(n, bool) and lo <= n <= hi):
+            raise ValueError('pfacet_lines = %r is invalid: allowed an integer in [%d, %d] (node lines across a '
+                             'ribbon, model=yade_pfacet)' % (n, lo, hi))
+    if 'pfacet_projectile' in p and p['pfacet_projectile'] not in ('nodes', 'pfacets'):
+        raise ValueError("pfacet_projectile = %r is invalid: allowed 'nodes' or 'pfacets'" % p['pfacet_projectile'])
+    if p['model'] == 'yade_pfacet' and p.get('bending'):
+        # the ribbon's bonds have no bending springs: its bending is the lines' geometry
+        raise ValueError("bending = %r is invalid: allowed 0 with model = 'yade_pfacet' (its bonds have no bending "
+                         "springs); 0 or 1 with model = 'yade'" % p['bending'])
+
+
+def _build(p, e, yarns, failure_strain=0.0):
+    """The YADE fabric of p.model (engines set, then built): a GridFabric or a PFacetFabric."""
+    if p.model == 'yade_pfacet':
+        return yp.build(e, yarns, lines=p.pfacet_lines, kn=p.kn, radius=p.grid_radius, failure_strain=failure_strain,
+                        friction=p.friction)
+    return yg.build(e, yarns, kn=p.kn, radius=p.grid_radius, bending=p.bending, failure_strain=failure_strain,
+                    friction=p.friction)
+
+
+def _engines(p, damping=0.0):
+    return (yp if p.model == 'yade_pfacet' else yg).engines(damping=damping)
 
 
 def _kinetic(ids):
@@ -59,9 +90,10 @@ def _elastic():
 
 
 def ballistic(p, d, weave_keys, contact_keys):
-    """The ballistic scene of scripts/ballistic.py in grid elements: the same ply (built by woven,
-    then mapped), clamped edges as held grid end nodes, a YADE Sphere or Box of the same mass, size
-    and speed. Writes d/summary.json and d/series.csv; returns the process exit status."""
+    """The ballistic scene of scripts/ballistic.py in grid elements or PFacet ribbons (p.model): the
+    same ply (built by woven, then mapped), clamped edges as held end nodes, a YADE Sphere or Box of
+    the same mass, size and speed. Writes d/summary.json and d/series.csv; returns the process exit
+    status."""
     import woven.ballistic
     from .output import write_summary
     from . import theory
@@ -73,10 +105,11 @@ def ballistic(p, d, weave_keys, contact_keys):
     w, e = ply.weave, ply.engine
     info = e.yarn(w.warp_yarns[0])
     eps_f = p.break_strain or info['failure_strain']
-    O.engines = yg.engines()
+    label = LABEL[p.model]
+    O.engines = _engines(p)
     t0 = time.time()
-    g = yg.build(e, w.warp_yarns + w.weft_yarns, kn=p.kn, radius=p.grid_radius, bending=p.bending,
-                 failure_strain=eps_f, friction=p.friction)
+    g = _build(p, e, w.warp_yarns + w.weft_yarns, failure_strain=eps_f)
+    lines = getattr(g, 'lines_per_yarn', 1)  # a ribbon's line bond carries 1/lines of the yarn's force
     n_warp = len(w.warp_yarns)
     if p.clamp == 4:
         g.fix_ends()
@@ -89,14 +122,17 @@ def ballistic(p, d, weave_keys, contact_keys):
     z_top = float(X[:, 2].max()) + g.radius
     half = 0.5 * p.size
     start = Vector3(centre[0], centre[1], z_top + half + p.standoff)
-    mat = yg.projectile_material(g, p.shape, p.size)
+    mat = (yp if p.model == 'yade_pfacet' else yg).projectile_material(g, p.shape, p.size)
     if p.shape == 'box':
         body = utils.box(start, (half, half, half), fixed=False, material=mat)
         body.mask = yg.BOX_MASK
         inertia = p.mass * p.size ** 2 / 6
     else:
         body = utils.sphere(start, half, fixed=False, material=mat)
-        body.mask = yg.CONNECTION_MASK
+        # a grid's sphere meets the connections; a ribbon's its nodes (pfacet_projectile=nodes, as a box
+        # does) or its PFacets
+        on_nodes = p.model == 'yade_pfacet' and p.pfacet_projectile == 'nodes'
+        body.mask = yg.BOX_MASK if on_nodes else yg.CONNECTION_MASK
         inertia = 0.4 * p.mass * half ** 2
     pid = O.bodies.append(body)
     proj = O.bodies[pid]
@@ -110,8 +146,9 @@ def ballistic(p, d, weave_keys, contact_keys):
     every = max(1, steps_max // p.samples)
     node_ids = g.node_ids()
     KE0 = 0.5 * p.mass * p.V ** 2
+    v_blow = 5 * p.V + 2 * math.sqrt(info['E'] / info['rho']) * eps_f  # (sample(): the blow-up check)
     st = {'contact_seen': False, 'clear': 0, 'steady': 0, 'vz_ref': -p.V, 'outcome': 'running',
-          'min_nose': float('inf'), 'max_overlap': 0.0, 'max_body': 0.0, 'unstable': '', 'released': 0.0, 'last_progress': time.time(), 'wall0': time.time()}
+          'min_nose': float('inf'), 'max_overlap': 0.0, 'max_body': 0.0, 'max_node_speed': 0.0, 'unstable': '', 'released': 0.0, 'last_progress': time.time(), 'wall0': time.time()}
     rows = []
     law = [f for f in O.engines if isinstance(f, yade.wrapper.InteractionLoop)][0]
 
@@ -128,15 +165,16 @@ def ballistic(p, d, weave_keys, contact_keys):
         # the scene's 'unstable' status (woven's InstabilityError): stop at once
         if not st['unstable']:
             st['unstable'] = why
-            print('ballistic (yade grid): unstable at t = %.3g us: %s' % (O.time * 1e6, why))
+            print('ballistic (%s): unstable at t = %.3g us: %s' % (label, O.time * 1e6, why))
         O.pause()
 
     def check_breaks():
         # a bond that broke since the last check took its elastic energy with it: released, as
-        # woven's books count it (its force was about E*A*eps_f when it went)
+        # woven's books count it (its force was about E*A*eps_f, on a ribbon's line E*A*eps_f/lines,
+        # when it went)
         n = g.remove_broken()
         if n:
-            st['released'] += n * 0.5 * (info['E'] * info['area'] * eps_f) ** 2 / float(np.mean(g.K[0]))
+            st['released'] += n * 0.5 * (info['E'] * info['area'] * eps_f / lines) ** 2 / float(np.mean(g.K[0]))
 
     def sample():
         ke_p = 0.5 * p.mass * proj.state.vel.squaredNorm()
@@ -153,12 +191,15 @@ def ballistic(p, d, weave_keys, contact_keys):
         el_c_books = books.get('elastPotential', el_c)
         balance = (kin + el_c_books + el_b + dissip + st['released'] - KE0) / KE0
         # a blow-up: energy created, or (the fragile bonds break and cap the energy) a node faster
-        # than the largest speed a stable impact gives, a few times the projectile's
+        # than the largest speed a stable impact gives: a few times the projectile's, plus twice the
+        # speed c*eps_f at which a line's end snaps back when its bond breaks (the ribbons' cut ends
+        # reached 5.6 V at 200 m/s with the energy books closed to 0.05 %)
         vmax = max(O.bodies[i].state.vel.norm() for i in node_ids)
+        st['max_node_speed'] = max(st['max_node_speed'], vmax)
         if not (math.isfinite(balance) and math.isfinite(vmax)) or balance > 1:
             blow_up('energy %s times the projectile\'s initial kinetic energy' % (balance + 1))
-        elif vmax > 5 * p.V:
-            blow_up('a grid node at %.3g m/s, %.3g times the impact speed' % (vmax, vmax / p.V))
+        elif vmax > v_blow:
+            blow_up('a node at %.3g m/s, %.3g times the impact speed (limit %.3g m/s)' % (vmax, vmax / p.V, v_blow))
         row = dict(t=O.time, vz=proj.state.vel[2], z=proj.state.pos[2], ke_projectile=ke_p, ke_fabric=ke_f,
                    elastic_bonds=el_b, elastic_contacts=el_c, dissipated=dissip, released=st['released'],
                    projectile_contacts=projectile_contacts(), broken=len(g.broken), overlap=ov,
@@ -190,8 +231,8 @@ def ballistic(p, d, weave_keys, contact_keys):
             st['outcome'] = 'arrested'
         if p.progress > 0 and time.time() - st['last_progress'] >= p.progress:
             st['last_progress'] = time.time()
-            print('ballistic (yade grid): t = %.2f us of %.2f, vz = %.1f m/s, projectile contacts %d, broken %d, wall %.0f s'
-                  % (O.time * 1e6, p.t_end * 1e6, vz, nc, len(g.broken), time.time() - st['wall0']))
+            print('ballistic (%s): t = %.2f us of %.2f, vz = %.1f m/s, projectile contacts %d, broken %d, wall %.0f s'
+                  % (label, O.time * 1e6, p.t_end * 1e6, vz, nc, len(g.broken), time.time() - st['wall0']))
             sys.stdout.flush()
         if p.stop and st['outcome'] != 'running':
             O.pause()
@@ -207,7 +248,7 @@ def ballistic(p, d, weave_keys, contact_keys):
         O.run(steps_max, True)
     except RuntimeError as ex:
         status = 'failed'
-        print('ballistic (yade grid): run stopped:', ex)
+        print('ballistic (%s): run stopped:' % label, ex)
     # To the end of the last step, as woven's scene: O.run(n, True) returns on YADE's 40 ms poll.
     wall = st.get('step_end', time.time()) - wall0
     check_breaks()
@@ -224,18 +265,22 @@ def ballistic(p, d, weave_keys, contact_keys):
     ke_p = rows[-1]['ke_projectile']
     perforated = st['outcome'] == 'perforated'
     balance = rows[-1]['balance']
-    n_conn = sum(len(c) for c in g.connections)
+    n_conn = len(g.connection_ids())
+    # a grid bond is a yarn gap; a ribbon's gap is cut where one of its lines broke (each listed)
+    cut = set((b[0], b[-2]) for b in g.broken)
     measured = {
-        'model': 'yade', 'outcome': st['outcome'], 'perforated': perforated,
+        'model': p.model, 'outcome': st['outcome'], 'perforated': perforated,
         'residual_velocity': v_res if perforated else 0.0, 'projectile_velocity_end': v_res,
         'absorbed_energy': KE0 - ke_p, 'energy_balance_error': balance,
-        'max_penetration': z_mid - st['min_nose'], 'broken_elements': len(g.broken),
-        'broken_yarns': len(set(y for y, _, _ in g.broken)),
-        'first_break_time': min((t for _, _, t in g.broken), default=None),
+        'max_penetration': z_mid - st['min_nose'], 'broken_elements': len(cut), 'broken_bonds': len(g.broken),
+        'broken_yarns': len(set(b[0] for b in g.broken)),
+        'first_break_time': min((b[-1] for b in g.broken), default=None),
         'simulated_time': O.time, 'steps': O.iter, 'dt': O.dt, 'yarns': len(g.nodes), 'grid_nodes': len(node_ids),
-        'grid_connections': n_conn, 'wall_seconds': wall, 'build_seconds': build_seconds,
+        'grid_connections': n_conn, 'pfacets': len(g.pfacet_ids()) if p.model == 'yade_pfacet' else None,
+        'pfacet_lines': lines if p.model == 'yade_pfacet' else None, 'wall_seconds': wall, 'build_seconds': build_seconds,
         'wall_seconds_per_simulated_us': wall / max(O.time * 1e6, 1e-30),
         'max_yarn_penetration': st['max_overlap'], 'max_body_penetration': st['max_body'], 'cps': n_conn,
+        'max_node_speed': st['max_node_speed'], 'node_speed_limit': v_blow,
         'yarn_thickness': info['thickness'], 'unstable_why': st['unstable'] or None, 'grid_radius': g.radius, 'kn': g.kn,
         'fabric_mass': g.total_mass(), 'woven_fabric_mass': g.woven_mass,
         'energy': {'projectile_initial': KE0, 'projectile_final': ke_p, 'fabric_kinetic': rows[-1]['ke_fabric'],
@@ -250,7 +295,7 @@ def ballistic(p, d, weave_keys, contact_keys):
              'simulated_time': 's', 'dt': 's', 'wall_seconds': 's', 'build_seconds': 's', 'energy': 'J',
              'wall_seconds_per_simulated_us': 's/us', 'energy_balance_error': "fraction of the projectile's initial kinetic energy",
              'max_yarn_penetration': 'm', 'max_body_penetration': 'm', 'yarn_thickness': 'm', 'grid_radius': 'm', 'kn': 'N/m', 'fabric_mass': 'kg', 'woven_fabric_mass': 'kg',
-             'first_break_time': 's', 'woven_dt_crit': 's'}
+             'first_break_time': 's', 'woven_dt_crit': 's', 'max_node_speed': 'm/s', 'node_speed_limit': 'm/s'}
     checks = {'energy_balance': {'value': balance, 'limit': p.energy_limit, 'passed': bool(abs(balance) <= p.energy_limit),
                                  'what': '(O.energy kinetic + elastPotential + dissipated, + bond elastic + released '
                                          '- initial) / initial kinetic energy'},
@@ -263,16 +308,16 @@ def ballistic(p, d, weave_keys, contact_keys):
     write_summary(d, 'ballistic', p, measured, reference, units, status, checks)
     what = ('perforated, residual velocity %.1f m/s' % v_res) if perforated else \
         '%s (velocity %.1f m/s at t = %.1f us)' % (st['outcome'], v_res, O.time * 1e6)
-    print('ballistic (yade grid): %s; %s; absorbed %.4g J, energy balance error %.2g %%, broken %d bonds; '
-          'max grid overlap %.3g m; %.1f us in %.1f s (%d steps, dt %.3g s) -> %s'
-          % (status, what, KE0 - ke_p, 100 * balance, len(g.broken), st['max_overlap'], O.time * 1e6, wall, O.iter, O.dt, d))
+    print('ballistic (%s): %s; %s; absorbed %.4g J, energy balance error %.2g %%, broken %d bonds; '
+          'max yarn overlap %.3g m; %.1f us in %.1f s (%d steps, dt %.3g s) -> %s'
+          % (label, status, what, KE0 - ke_p, 100 * balance, len(g.broken), st['max_overlap'], O.time * 1e6, wall, O.iter, O.dt, d))
     return 0 if status == 'ok' else 1
 
 
 def tension(p, d, weave_args):
-    """The tension scene of scripts/tension.py in grid elements: warp end nodes at x_min held, those at
-    x_max pulled along +x at p.velocity (ramped over p.ramp of the run); mode=biaxial pulls the weft
-    too. NewtonIntegrator's non-viscous damping is p.damping (YADE's analogue of woven's damping
+    """The tension scene of scripts/tension.py in grid elements or PFacet ribbons (p.model): warp end
+    nodes at x_min held, those at x_max pulled along +x at p.velocity (ramped over p.ramp of the run);
+    mode=biaxial pulls the weft too. NewtonIntegrator's non-viscous damping is p.damping (YADE's analogue of woven's damping
     ratio, not the same law). Writes curve.csv and summary.json; returns the exit status."""
     import os
     import woven
@@ -283,22 +328,22 @@ def tension(p, d, weave_args):
     O.interactions.clear()
     w = woven.weave(**weave_args)
     e = w.engine
-    O.engines = yg.engines(damping=p.damping)
-    g = yg.build(e, w.warp_yarns + w.weft_yarns, kn=p.kn, radius=p.grid_radius, bending=p.bending,
-                 friction=p.friction)
+    O.engines = _engines(p, damping=p.damping)
+    g = _build(p, e, w.warp_yarns + w.weft_yarns)
     nw = len(w.warp_yarns)
     strain_end = p.strain_end if p.strain_end > 0 else w.summary['warp_crimp_built'] + 0.003
     pulled = [(range(nw), 0)] + ([(range(nw, len(g.nodes)), 1)] if p.mode == 'biaxial' else [])
     first, last = [], []
     for yarns, axis in pulled:
         for k in yarns:
-            a, b = O.bodies[g.nodes[k][0]], O.bodies[g.nodes[k][-1]]
-            a.state.blockedDOFs = b.state.blockedDOFs = 'xyzXYZ'
-            a.state.vel = b.state.vel = Vector3(0, 0, 0)
+            a, b = g.end_nodes(k)  # a grid yarn's end node, or every line's of a ribbon
+            for i in a + b:
+                O.bodies[i].state.blockedDOFs = 'xyzXYZ'
+                O.bodies[i].state.vel = Vector3(0, 0, 0)
             if axis == 0:
-                first.append(g.nodes[k][0])
-                last.append(g.nodes[k][-1])
-    grips = [(g.nodes[k][-1], axis) for yarns, axis in pulled for k in yarns]
+                first += a
+                last += b
+    grips = [(i, axis) for yarns, axis in pulled for k in yarns for i in g.end_nodes(k)[1]]
 
     def xs(ids):
         return float(np.mean([O.bodies[i].state.pos[0] for i in ids]))
@@ -340,7 +385,7 @@ def tension(p, d, weave_args):
     kf, bf = np.polyfit(eps[fin], F[fin], 1)
     toe = -bf / kf if kf > 0 else float('nan')
     thickness = info['thickness']
-    measured = {'model': 'yade', 'steps': O.iter, 'dt': O.dt, 'strain_end': strain_end, 'grip_distance': L,
+    measured = {'model': p.model, 'steps': O.iter, 'dt': O.dt, 'strain_end': strain_end, 'grip_distance': L,
                 'strain_reached': float(eps.max()), 'force_end': float(F[-1]), 'toe_strain': toe, 'final_stiffness': kf,
                 'final_stiffness_per_straight_yarns': kf / (nw * EA), 'max_transient_penetration': st['max_overlap'],
                 'final_overlap': float(C[-1, 3]), 'grid_radius': g.radius, 'kn': g.kn, 'wall_seconds': wall,
@@ -355,6 +400,6 @@ def tension(p, d, weave_args):
                                 'what': 'largest grid-grid overlap at the end / grid diameter'}}
     status = 'ok' if all(c['passed'] for c in checks.values()) else 'failed'
     write_summary(d, 'tension', p, measured, reference, units, status, checks)
-    print('tension (yade grid): %s; toe %.3f %%, final / (n E A) %.3f, max overlap %.2g m (diameter %.2g m), '
-          '%d steps in %.1f s -> %s' % (status, 100 * toe, kf / (nw * EA), st['max_overlap'], 2 * g.radius, O.iter, wall, d))
+    print('tension (%s): %s; toe %.3f %%, final / (n E A) %.3f, max overlap %.2g m (diameter %.2g m), '
+          '%d steps in %.1f s -> %s' % (LABEL[p.model], status, 100 * toe, kf / (nw * EA), st['max_overlap'], 2 * g.radius, O.iter, wall, d))
     return 0 if status == 'ok' else 1
