@@ -332,8 +332,8 @@ if p.frame == 'mesh':
     # the jaws press them, so they pull in as far as the jaws' friction and the crimp let them.
     frame_ids = woven.ballistic.add_frame(ply, p.frame_width, p.frame_gap, p.frame_friction, p.frame_edge, p.frame_force)
     jaw0 = Vector3(O.bodies[frame_ids[0]].state.pos)
-ends = np.array(sorted({n for y in range(eng.n_yarns) for n in (eng.yarn(y)['first_node'],
-                                                                eng.yarn(y)['first_node'] + eng.yarn(y)['n_nodes'] - 1)}))
+    ends = np.array(sorted({n for y in range(eng.n_yarns) for n in (eng.yarn(y)['first_node'],
+                                                                    eng.yarn(y)['first_node'] + eng.yarn(y)['n_nodes'] - 1)}))
 places0 = {}  # the crossings' places after the first step (they are made in it), for their slip (load_sharing)
 # How far it reaches below and above its centre of mass at the start (the nose, and the rear that
 # must pass the last ply): half the cube's edge or the sphere's radius in the scene as it was.

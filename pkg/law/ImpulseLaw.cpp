@@ -40,12 +40,12 @@ void ImpulseLaw::applyRow(Fabric& f, const Row& r, const Vec3& J) {
   }
 }
 
-void ImpulseLaw::loadBodies(const std::vector<RigidBody>* bodies) {
+void ImpulseLaw::loadBodies(const std::vector<RigidBody>* bodies, Real bodyFriction) {
   bodyVel_.clear();
   if (!bodies) return;
   for (const RigidBody& b : *bodies)
     bodyVel_.push_back({b.vel, b.angVel, b.invMass(), b.invInertiaWorld(), b.kineticEnergy(), b.vel,
-                        b.dynamic() ? Vec3(0.5 * b.hostKick) : Vec3(Vec3::Zero()), b.friction});
+                        b.dynamic() ? Vec3(0.5 * b.hostKick) : Vec3(Vec3::Zero()), b.friction >= 0 ? b.friction : bodyFriction});
 }
 
 Real ImpulseLaw::storeBodies(std::vector<RigidBody>* bodies, bool afterDrift) {
@@ -83,7 +83,7 @@ void ImpulseLaw::resolve(Fabric& f, const std::vector<CPContact>& contacts, cons
   // is measured again); the paper model's are the band alone, so a miss stays in the motion (the
   // pull-out's balance went from 0.65 % to 2 % with it).
   solverTol_ = p.model == ContactModel::Gap ? std::max(p.tolerance, p.solverTolerance / H) : p.tolerance;
-  loadBodies(bodies);
+  loadBodies(bodies, p.bodyFriction);
   // Which contacts need a row and their rows, each contact on its own (threads; the capacity is the
   // costly part and reads nothing the rows change); then the body rows, one by one.
   const Index nc = static_cast<Index>(contacts.size());
@@ -321,7 +321,7 @@ Real ImpulseLaw::solveRow(Fabric& f, Row& r, const ContactParams& p, bool fricti
   const Real lambda = std::max(r.lambda + (r.target - vn) * r.invK, Real(0));
   Vec3 J = (lambda - r.lambda) * r.normal;
   r.lambda = lambda;
-  const Real mu = r.body < 0 ? p.friction : bodyVel_[r.body].friction >= 0 ? bodyVel_[r.body].friction : p.bodyFriction;
+  const Real mu = r.body < 0 ? p.friction : bodyVel_[r.body].friction;
   Vec3 Jt = Vec3::Zero();
   if (friction && mu > 0) {  // Coulomb: cancel the tangential slip, within the cone mu * lambda
     const Vec3 vt = vr - vn * r.normal;
@@ -572,7 +572,7 @@ int ImpulseLaw::solve(Fabric& f, const ContactParams& p, bool friction) {
 
 Real ImpulseLaw::restitute(Fabric& f, const ContactParams& p, std::vector<RigidBody>* bodies, Real* bodyWork) {
   if (p.restitution == 0 || rows_.empty()) return 0;
-  loadBodies(bodies);
+  loadBodies(bodies, p.bodyFriction);
   std::size_t kept = 0;
   for (const Row& r : rows_) {
     if (!(r.lambda > 0 && r.vn0 < -p.tolerance)) continue;

@@ -148,11 +148,11 @@ class ImpulseLaw {
     Real ke0 = 0;        // kinetic energy before the impulses [J]
     Vec3 v0 = Vec3::Zero();        // velocity before the impulses [m/s]
     Vec3 halfKick = Vec3::Zero();  // RigidBody::hostKick / 2 of a dynamic body [m/s]
-    Real friction = -1;            // RigidBody::friction (negative: ContactParams::bodyFriction)
+    Real friction = 0;             // Coulomb coefficient with the yarns: its own, else ContactParams::bodyFriction
   };
   Vec3 rowVelocity(const Fabric& f, const Row& r) const;     // relative velocity of the contact points
   void applyRow(Fabric& f, const Row& r, const Vec3& J);      // J on B, -J on A
-  void loadBodies(const std::vector<RigidBody>* bodies);
+  void loadBodies(const std::vector<RigidBody>* bodies, Real bodyFriction);
   // writes back, returns the bodies' work (their kinetic energy at the synchronised velocity: step
   // n's before the drift, step n+1's after it)
   Real storeBodies(std::vector<RigidBody>* bodies, bool afterDrift);
